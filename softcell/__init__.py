@@ -1,0 +1,48 @@
+"""softcell: simulate, track and analyse a soft robotic cell.
+
+A self-propelled elliptical bot runs and tumbles inside a deformable membrane (Mohapatra,
+Wery et al., "Run and tumble dynamics of a soft robotic cell"). Importing softcell is cheap:
+nothing is compiled and xarray is imported only when a function that needs it is called.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from softcell._version import __version__
+from softcell.core.errors import ConfigError, ParameterError, SchemaError, SoftcellError
+from softcell.core.hookspecs import hookimpl
+from softcell.core.params import Parameters
+
+if TYPE_CHECKING:
+    from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
+    from softcell.io.schema import validate
+
+__all__ = [
+    "ConfigError",
+    "ParameterError",
+    "Parameters",
+    "SchemaError",
+    "SoftcellError",
+    "__version__",
+    "hookimpl",
+    "open_dataset",
+    "read_dataset",
+    "validate",
+    "write_dataset",
+]
+
+_LAZY = {
+    "open_dataset": "softcell.io.netcdf",
+    "read_dataset": "softcell.io.netcdf",
+    "write_dataset": "softcell.io.netcdf",
+    "validate": "softcell.io.schema",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'softcell' has no attribute {name!r}")

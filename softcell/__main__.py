@@ -1,0 +1,3 @@
+from softcell.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,114 @@
+"""The ``softcell`` command: a thin layer over the public API.
+
+Every parameter of the model is a flag (``--radius 4,8,12`` sweeps it); a TOML file may set
+them too (flags win). Bad input is reported as one line on stderr with exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from softcell._version import __version__
+from softcell.core.errors import SoftcellError
+from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
+from softcell.core.runconfig import RunConfig, load_config
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec]) -> None:
+    group = parser.add_argument_group(
+        "model parameters", "override the defaults (SPEC section 2); a comma-separated list "
+        "sweeps a parameter")
+    for spec in specs:
+        unit = "" if spec.unit == "1" else f" [{spec.unit}]"
+        default = "derived" if spec.default is None else spec.default
+        group.add_argument(_flag(spec.name), dest=f"param_{spec.name}", metavar="VALUE",
+                           help=f"{spec.long_name}{unit} (default {default})")
+
+
+def _flag_values(args: argparse.Namespace) -> dict[str, Any]:
+    values: dict[str, Any] = {}
+    for key, raw in vars(args).items():
+        if key.startswith("param_") and raw is not None:
+            items = [s.strip() for s in raw.split(",")]
+            values[key.removeprefix("param_")] = items if len(items) > 1 else items[0]
+    return values
+
+
+def _config(args: argparse.Namespace) -> RunConfig:
+    base = load_config(args.config) if getattr(args, "config", None) else RunConfig()
+    return base.updated(parameters=_flag_values(args))
+
+
+def _cmd_plugins(args: argparse.Namespace) -> int:
+    from softcell.core.registry import KINDS, get_registry
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        registry = get_registry()
+    for warning in caught:
+        print(f"warning: {warning.message}", file=sys.stderr)
+    for kind in KINDS.values():
+        entries = registry.entries(kind)
+        print(f"{kind} ({len(entries)})")
+        if not entries:
+            print("    (none registered)")
+        for entry in entries:
+            cls = entry.component
+            print(f"    {cls.name}: {cls.description}")
+            print(f"        origin: {entry.origin}")
+            for spec in cls.parameters:
+                unit = "" if spec.unit == "1" else f" {spec.unit}"
+                print(f"        {spec.name} = {spec.default}{unit}  ({spec.long_name})")
+    return 0
+
+
+def _cmd_params(args: argparse.Namespace) -> int:
+    config = _config(args)
+    points = expand_sweep(config.parameters, config.extra_specs())
+    _, first = points[0]
+    swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
+    width = max(len(n) for n in first)
+    for name, value in first.items():
+        spec = first.specs[name]
+        shown = ", ".join(map(str, swept[name])) if name in swept else value
+        unit = "" if spec.unit == "1" else spec.unit
+        print(f"{name:<{width}}  {shown!s:<12} {unit:<10} {spec.long_name}")
+    if swept:
+        print(f"# {len(points)} parameter points, swept: {', '.join(swept)}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``softcell`` command."""
+    parser = argparse.ArgumentParser(
+        prog="softcell", description="Simulate, track and analyse a soft robotic cell.")
+    parser.add_argument("--version", action="version", version=f"softcell {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("plugins", help="list every component by kind, with origin and parameters")
+    p.set_defaults(func=_cmd_plugins)
+
+    p = sub.add_parser("params", help="validate and print the parameters of a configuration")
+    p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
+    _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
+    p.set_defaults(func=_cmd_params)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``softcell`` command; returns the exit status (2 for bad input)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except SoftcellError as exc:
+        print(f"softcell: error: {exc}", file=sys.stderr)
+        return 2

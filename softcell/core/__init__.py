@@ -1,0 +1,1 @@
+"""Parameters, the plugin contracts and registry, the engine, ensembles and analysis."""

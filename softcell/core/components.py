@@ -1,0 +1,224 @@
+"""The four component contracts: one base class per kind of plugin component.
+
+Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
+``description``, an explicit parameter declaration, and explicit methods; there is no
+``**kwargs`` catch-all. A component class is registered through a hook of
+:mod:`softcell.core.hookspecs` and instantiated with a validated
+:class:`~softcell.core.params.Parameters`.
+"""
+
+from __future__ import annotations
+
+import re
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from softcell.core.params import ParameterSpec
+
+if TYPE_CHECKING:
+    from softcell.core.params import Parameters
+
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class Component(ABC):
+    """Base of every component.
+
+    Class attributes
+    ----------------
+    kind : str
+        Set by the contract class: ``energy_term``, ``driving_protocol``, ``integrator`` or
+        ``stopgo_detector``.
+    name : str
+        Unique within its kind; lower case, digits and underscores (``run_and_tumble``).
+    description : str
+        One line, shown by ``softcell plugins``.
+    parameters : tuple of ParameterSpec
+        The parameters the component reads, each with default, unit and range. A component may
+        use parameters of the model catalogue (:data:`softcell.core.params.MODEL_PARAMETERS`)
+        by listing their specs, or declare new ones.
+    """
+
+    kind: ClassVar[str]
+    name: ClassVar[str]
+    description: ClassVar[str]
+    parameters: ClassVar[tuple[ParameterSpec, ...]] = ()
+
+    def __init__(self, params: Parameters) -> None:
+        self.check(params)
+        self.params = params
+
+    @classmethod
+    def check(cls, params: Parameters) -> None:
+        """Raise :class:`~softcell.core.errors.ParameterError` for a parameter set this component
+        cannot run with (beyond the per-parameter ranges). The default accepts everything."""
+        return None
+
+    def coefficients(self) -> np.ndarray:
+        """The component's parameter values as a float64 array, in the order of ``parameters``
+        (the layout its compiled kernel receives). String parameters are not included."""
+        return np.array([float(self.params[s.name]) for s in self.parameters if s.kind is not str],
+                        dtype=np.float64)
+
+    @classmethod
+    def contract_problems(cls) -> list[str]:
+        """What is wrong with this class as a component (empty when it is well formed)."""
+        problems = []
+        name = getattr(cls, "name", None)
+        if not isinstance(name, str) or not _NAME.match(name):
+            problems.append(f"name {name!r} is not a lower-case identifier")
+        description = getattr(cls, "description", None)
+        if not isinstance(description, str) or not description.strip() or "\n" in description:
+            problems.append("description must be one non-empty line")
+        if not all(isinstance(s, ParameterSpec) for s in cls.parameters):
+            problems.append("parameters must be a tuple of ParameterSpec")
+        if getattr(cls, "__abstractmethods__", None):
+            missing = ", ".join(sorted(cls.__abstractmethods__))
+            problems.append(f"abstract methods not implemented: {missing}")
+        return problems
+
+
+class EnergyTerm(Component):
+    """A membrane energy density and its pointwise partial derivatives (SI:EQ:Eel, Est, Eint).
+
+    The energy is E = integral_0^{2 pi} e(gamma, gamma', gamma''; bot pose) d xi (N cm),
+    evaluated as E = (2 pi / N) sum_n e_n at the collocation points xi_n = 2 pi n / N.
+    The engine sums the partial derivatives of all terms and assembles the force density
+    f = -P0 + D(P1) - D^2(P2) spectrally (SPEC section 3).
+    """
+
+    kind = "energy_term"
+    #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
+    couples_bot: ClassVar[bool] = False
+
+    @abstractmethod
+    def partials_kernel(self) -> Callable[..., None]:
+        """Return the compiled (``numba.njit``) kernel of this term.
+
+        Kernel signature::
+
+            kernel(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
+                   p0x, p0y, p1x, p1y, p2x, p2y, dpose) -> None
+
+        ``x, y`` (cm), ``xp, yp`` (cm), ``xpp, ypp`` (cm): the curve and its first and second
+        derivatives with respect to xi at the N points, float64[N]. ``pose``: float64[3], the
+        bot's x, y (cm) and heading (rad). ``context``: float64[3], l0 (cm), the bot's semi-major
+        and semi-minor axes (cm). ``coefficients``: float64[:], from :meth:`coefficients`.
+        The kernel *adds* de/dx, de/dy (N) into ``p0x, p0y``, de/dx', de/dy' (N) into
+        ``p1x, p1y``, de/dx'', de/dy'' (N) into ``p2x, p2y``, and, if ``couples_bot``,
+        the sum over n of de_n/d(x_bot, y_bot, theta_bot) (N, N, N cm) into ``dpose[0:3]``.
+        It must not allocate on the heap and must leave the other entries alone.
+        """
+
+    @abstractmethod
+    def density(self, x: np.ndarray, y: np.ndarray, xp: np.ndarray, yp: np.ndarray,
+                xpp: np.ndarray, ypp: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """The energy density e_n (N cm per unit xi) at the N points, for checks and diagnostics.
+
+        Arrays as in :meth:`partials_kernel`; returns float64[N].
+        """
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A driving protocol's phase schedule for one realization.
+
+    Attributes
+    ----------
+    start : float64[M]
+        Start time of each phase (s); ``start[0] == 0`` and strictly increasing.
+    phase : int8[M]
+        Phase code of each phase: 0 tumble, 1 run (the ``bot_phase`` flag values).
+    data : float64[M]
+        One number per phase that the drive kernel receives (e.g. the turn sign +-1).
+    """
+
+    start: np.ndarray
+    phase: np.ndarray
+    data: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.start)
+        if n == 0 or len(self.phase) != n or len(self.data) != n:
+            raise ValueError("a schedule needs equally long, non-empty start, phase and data")
+        if self.start[0] != 0.0 or np.any(np.diff(self.start) <= 0):
+            raise ValueError("schedule start times must begin at 0 s and increase strictly")
+
+
+class DrivingProtocol(Component):
+    """The bot's internal drive: a phase schedule and a force and torque in each phase (SPEC 5)."""
+
+    kind = "driving_protocol"
+
+    @abstractmethod
+    def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
+        """Draw the whole phase schedule covering [0, ``duration``] s from ``rng``."""
+
+    @abstractmethod
+    def initial_heading(self, rng: np.random.Generator) -> float:
+        """Draw the bot's initial heading (rad)."""
+
+    @abstractmethod
+    def drive_kernel(self) -> Callable[..., None]:
+        """Return the compiled (``numba.njit``) drive kernel.
+
+        Kernel signature::
+
+            kernel(phase, data, pose, context, coefficients, out) -> None
+
+        ``phase``: int, the phase code; ``data``: float, the phase's schedule datum;
+        ``pose``: float64[3], bot x, y (cm) and heading (rad); ``context`` and
+        ``coefficients`` as for :meth:`EnergyTerm.partials_kernel`. The kernel writes the
+        drive force x, y (N) and torque about the bot's center (N cm) into ``out[0:3]``.
+        """
+
+
+class Integrator(Component):
+    """Advances the coupled bot-membrane state in time."""
+
+    kind = "integrator"
+
+    @abstractmethod
+    def build(self, model: object) -> Callable[..., object]:
+        """Compose the model's compiled kernels into a compiled stepper.
+
+        ``model`` is the engine's compiled model (``softcell.core.engine``); the returned
+        callable advances the state from one sample time (s) to the next. The exact
+        signatures are documented in ``docs/plugins.md``.
+        """
+
+
+class StopGoDetector(Component):
+    """Labels each sample of a speed series as stop or go (SPEC section 6)."""
+
+    kind = "stopgo_detector"
+
+    @abstractmethod
+    def label(self, speed: np.ndarray, interval: float) -> np.ndarray:
+        """Label samples.
+
+        Parameters
+        ----------
+        speed : float64 array
+            Speed (cm/s), time along the last axis; NaN where unknown.
+        interval : float
+            Sampling interval (s) of the series.
+
+        Returns
+        -------
+        int8 array of the same shape
+            1 go, 0 stop, -1 unknown (NaN speed).
+        """
+
+
+#: Contract class of each kind, by the hook that returns it.
+CONTRACTS: dict[str, type[Component]] = {
+    "softcell_energy_terms": EnergyTerm,
+    "softcell_driving_protocols": DrivingProtocol,
+    "softcell_integrators": Integrator,
+    "softcell_stopgo_detectors": StopGoDetector,
+}

@@ -1,0 +1,35 @@
+"""Exceptions that softcell raises for bad input, so the CLI can print them as one line."""
+
+from __future__ import annotations
+
+
+class SoftcellError(Exception):
+    """Base class of every error softcell reports to a user as one line (CLI exit status 2)."""
+
+
+class ParameterError(SoftcellError, ValueError):
+    """A parameter value outside its allowed range.
+
+    The message names the parameter, its value with unit, the allowed range and the unit.
+    """
+
+    def __init__(self, name: str, value: object, allowed: str, unit: str = "") -> None:
+        self.name, self.value, self.allowed, self.unit = name, value, allowed, unit
+        shown = f"{value} {unit}".strip() if unit not in ("", "1") else f"{value}"
+        super().__init__(f"parameter {name} = {shown} is not allowed: {allowed}")
+
+
+class ConfigError(SoftcellError, ValueError):
+    """A configuration file or command line that cannot be read (unknown key, bad syntax)."""
+
+
+class SchemaError(SoftcellError, ValueError):
+    """A Dataset that does not follow the softcell schema; the message names every problem."""
+
+    def __init__(self, problems: list[str]) -> None:
+        self.problems = list(problems)
+        super().__init__("dataset does not follow the softcell schema: " + "; ".join(problems))
+
+
+class RegistryError(SoftcellError):
+    """Conflicting or malformed plugin components (e.g. two components with one name)."""

@@ -1,0 +1,90 @@
+"""Every extension point of softcell, in one module.
+
+A plugin is a module (or object) with functions named after these hooks and marked with
+:data:`softcell.hookimpl`. Each hook takes no arguments and returns a list of component
+*classes*; softcell instantiates them later with a validated :class:`~softcell.Parameters`.
+
+Hooks are called once, when the registry is built (the first time a component is looked up
+by name, or ``softcell plugins`` runs). They are never called inside a time loop: components
+hand compiled kernels to the engine instead. Built-in components are registered through the
+same hooks as third-party ones (``softcell.plugins``).
+"""
+
+from __future__ import annotations
+
+import pluggy
+
+hookspec = pluggy.HookspecMarker("softcell")
+hookimpl = pluggy.HookimplMarker("softcell")
+
+# ---------------------------------------------------------------------------------------------
+# The model: membrane energy, the bot's drive, time integration
+# ---------------------------------------------------------------------------------------------
+
+
+@hookspec
+def softcell_energy_terms() -> list[type]:
+    """Membrane energy terms this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.core.components.EnergyTerm`. Each supplies an energy
+        density per unit of the curve parameter xi (N cm, so that E = integral over xi in
+        [0, 2 pi) is in N cm) and a compiled kernel for its pointwise partial derivatives
+        P0 = de/dgamma (N), P1 = de/dgamma' (N), P2 = de/dgamma'' (N) at the collocation points,
+        and, if it involves the bot, de/d(bot pose).
+
+    Called once when the registry is built.
+    """
+
+
+@hookspec
+def softcell_driving_protocols() -> list[type]:
+    """Driving protocols (the bot's internal drive) this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.core.components.DrivingProtocol`. Each draws its whole
+        phase schedule (start times in s, phase codes, per-phase data) from a
+        :class:`numpy.random.Generator`, and supplies a compiled kernel that maps the phase and
+        the bot's state (x, y in cm, heading in rad) to a drive force (N) and torque (N cm).
+
+    Called once when the registry is built.
+    """
+
+
+@hookspec
+def softcell_integrators() -> list[type]:
+    """Time integrators this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.core.components.Integrator`. Each advances the coupled
+        bot-membrane state (membrane Fourier modes in cm, bot position in cm, heading in rad)
+        from one sample time (s) to the next.
+
+    Called once when the registry is built.
+    """
+
+
+# ---------------------------------------------------------------------------------------------
+# Analysis
+# ---------------------------------------------------------------------------------------------
+
+
+@hookspec
+def softcell_stopgo_detectors() -> list[type]:
+    """Stop/go detectors this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.core.components.StopGoDetector`. Each labels every
+        sample of a speed series (cm/s) as stop (0), go (1) or unknown (-1, where the speed
+        is NaN).
+
+    Called once when the registry is built.
+    """

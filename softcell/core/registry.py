@@ -1,0 +1,233 @@
+"""The plugin registry: built-in components and entry-point plugins through one set of hooks.
+
+The registry registers the built-in plugin modules (:data:`BUILTIN_PLUGINS`), then every
+entry point of the group ``softcell``, through pluggy, and collects the component classes their
+hooks return. A plugin that fails to import or to register is reported with a
+:class:`PluginWarning` naming its distribution and the error, and skipped. Two components of
+one kind with one name are an error naming both origins. ``SOFTCELL_DISABLE_PLUGINS=a,b``
+blocks plugins by name (entry-point names, or the short names of built-ins).
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import importlib.metadata
+import os
+import warnings
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import pluggy
+
+from softcell.core import hookspecs
+from softcell.core.components import CONTRACTS, Component
+from softcell.core.errors import ConfigError, RegistryError
+from softcell.core.params import ParameterSpec, merge_specs, suggest
+
+ENTRY_POINT_GROUP = "softcell"
+DISABLE_ENV = "SOFTCELL_DISABLE_PLUGINS"
+
+#: Built-in plugin modules, registered through the same hooks as third-party plugins.
+BUILTIN_PLUGINS: tuple[str, ...] = ("softcell.plugins.threshold",)
+
+#: Kind name of each hook, in the order ``softcell plugins`` prints them.
+KINDS: dict[str, str] = {hook: contract.kind for hook, contract in CONTRACTS.items()}
+
+
+class PluginWarning(UserWarning):
+    """A plugin was skipped because it failed to import or to register."""
+
+
+@dataclass(frozen=True)
+class Registered:
+    """A component class and where it came from (built-in module or distribution)."""
+
+    component: type[Component]
+    origin: str
+    plugin: str
+
+
+class Registry:
+    """All components, by kind and name.
+
+    Parameters
+    ----------
+    entry_points : iterable of importlib.metadata.EntryPoint, optional
+        Entry points to load; by default those installed in the group ``softcell``.
+    disabled : iterable of str, optional
+        Plugin names to block; by default from the environment variable
+        ``SOFTCELL_DISABLE_PLUGINS`` (comma-separated).
+    extra_plugins : iterable of (name, object), optional
+        Plugin modules or objects to register directly, after the built-ins (tests use this).
+    builtins : tuple of str
+        Built-in plugin modules to register.
+
+    Raises
+    ------
+    RegistryError
+        When two components of one kind share a name.
+    """
+
+    def __init__(self, entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
+                 disabled: Iterable[str] | None = None,
+                 extra_plugins: Iterable[tuple[str, object]] = (),
+                 builtins: tuple[str, ...] = BUILTIN_PLUGINS) -> None:
+        if disabled is None:
+            disabled = [s.strip() for s in os.environ.get(DISABLE_ENV, "").split(",")]
+        self.disabled = frozenset(d for d in disabled if d)
+        self.skipped: list[tuple[str, str]] = []  # (plugin, reason)
+        self.pm = pluggy.PluginManager(ENTRY_POINT_GROUP)
+        self.pm.add_hookspecs(hookspecs)
+        self._origins: dict[str, str] = {}
+
+        for module_name in builtins:
+            short = module_name.rsplit(".", 1)[-1]
+            if short not in self.disabled:
+                self._register(short, importlib.import_module(module_name),
+                               f"built-in ({module_name})")
+        for name, plugin in extra_plugins:
+            if name not in self.disabled:
+                self._register(name, plugin, f"registered object {name!r}")
+        if entry_points is None:
+            entry_points = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
+        for ep in entry_points:
+            if ep.name not in self.disabled:
+                self._load_entry_point(ep)
+        self.pm.check_pending()
+        self._components = self._collect()
+
+    # -- loading ---------------------------------------------------------------------------
+
+    def _register(self, name: str, plugin: object, origin: str) -> None:
+        self.pm.register(plugin, name=name)
+        self._origins[name] = origin
+
+    def _skip(self, plugin: str, origin: str, error: BaseException | str) -> None:
+        reason = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
+        self.skipped.append((plugin, reason))
+        warnings.warn(f"softcell plugin {plugin!r} from {origin} was skipped: {reason}",
+                      PluginWarning, stacklevel=3)
+
+    def _load_entry_point(self, ep: importlib.metadata.EntryPoint) -> None:
+        dist = getattr(ep, "dist", None)
+        distname = f"distribution {dist.name} {dist.version}" if dist else "an unknown distribution"
+        origin = f"{distname} (entry point {ep.name} = {ep.value})"
+        try:
+            self._register(ep.name, ep.load(), origin)
+            self.pm.check_pending()  # a misspelt hook name is an error, not a silent no-op
+        except Exception as exc:  # a broken plugin must not take softcell down
+            if self.pm.has_plugin(ep.name):
+                self.pm.unregister(name=ep.name)
+            self._skip(ep.name, origin, exc)
+
+    def _plugin_components(self, plugin: object) -> dict[str, list[type[Component]]]:
+        found: dict[str, list[type[Component]]] = {}
+        for hook_name, contract in CONTRACTS.items():
+            for impl in getattr(self.pm.hook, hook_name).get_hookimpls():
+                if impl.plugin is not plugin:
+                    continue
+                result = impl.function()
+                if not isinstance(result, list | tuple):
+                    raise TypeError(f"{hook_name} returned {type(result).__name__}, not a list")
+                for cls in result:
+                    if not (isinstance(cls, type) and issubclass(cls, contract)):
+                        raise TypeError(f"{hook_name} returned {cls!r}, "
+                                        f"not a subclass of {contract.__name__}")
+                    problems = cls.contract_problems()
+                    if problems:
+                        raise TypeError(f"{cls.__qualname__}: " + "; ".join(problems))
+                found.setdefault(contract.kind, []).extend(result)
+        return found
+
+    def _collect(self) -> dict[str, dict[str, Registered]]:
+        components: dict[str, dict[str, Registered]] = {k: {} for k in KINDS.values()}
+        for plugin_name, plugin in list(self.pm.list_name_plugin()):
+            origin = self._origins.get(plugin_name, plugin_name)
+            try:
+                found = self._plugin_components(plugin)
+            except Exception as exc:
+                self.pm.unregister(plugin)
+                self._skip(plugin_name, origin, exc)
+                continue
+            for kind, classes in found.items():
+                for cls in classes:
+                    other = components[kind].get(cls.name)
+                    if other is not None:
+                        raise RegistryError(
+                            f"two {kind} components are named {cls.name!r}: one from "
+                            f"{other.origin}, one from {origin}; block one with "
+                            f"{DISABLE_ENV}={plugin_name} or {DISABLE_ENV}={other.plugin}")
+                    components[kind][cls.name] = Registered(cls, origin, plugin_name)
+        return components
+
+    # -- queries ---------------------------------------------------------------------------
+
+    def names(self, kind: str) -> list[str]:
+        """Names of the components of ``kind``, sorted."""
+        return sorted(self._kind(kind))
+
+    def entries(self, kind: str) -> list[Registered]:
+        """Registered components of ``kind``, sorted by name."""
+        table = self._kind(kind)
+        return [table[n] for n in sorted(table)]
+
+    def get(self, kind: str, name: str) -> type[Component]:
+        """The component class of ``kind`` named ``name``.
+
+        Raises
+        ------
+        ConfigError
+            For an unknown name; the message lists the names that exist.
+        """
+        table = self._kind(kind)
+        if name not in table:
+            have = ", ".join(sorted(table)) or "none"
+            raise ConfigError(f"no {kind} named {name!r}{suggest(name, table)}; "
+                              f"available: {have}")
+        return table[name].component
+
+    def parameter_specs(self) -> dict[str, ParameterSpec]:
+        """Every parameter declared by a registered component, by name."""
+        return merge_specs(*(r.component.parameters for kind in self._components.values()
+                             for r in kind.values()))
+
+    def __iter__(self) -> Iterator[Registered]:
+        for kind in KINDS.values():
+            yield from self.entries(kind)
+
+    def _kind(self, kind: str) -> dict[str, Registered]:
+        try:
+            return self._components[kind]
+        except KeyError:
+            raise ConfigError(f"no component kind {kind!r}; kinds: "
+                              + ", ".join(KINDS.values())) from None
+
+
+_override: list[Registry] = []
+
+
+@functools.cache
+def _default_registry() -> Registry:
+    return Registry()
+
+
+def get_registry() -> Registry:
+    """The process-wide registry, built on first use (not at import)."""
+    return _override[-1] if _override else _default_registry()
+
+
+@contextmanager
+def registered(*plugins: object, name: str = "test_plugin") -> Iterator[Registry]:
+    """Within the block, the process-wide registry also holds ``plugins`` (for tests).
+
+    Each plugin is a module or object with hook implementations; the built-ins and installed
+    entry points are registered as usual.
+    """
+    extra = [(name if len(plugins) == 1 else f"{name}_{i}", p) for i, p in enumerate(plugins)]
+    _override.append(Registry(extra_plugins=extra))
+    try:
+        yield _override[-1]
+    finally:
+        _override.pop()

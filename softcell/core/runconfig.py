@@ -1,0 +1,101 @@
+"""Run configuration: parameter values (possibly swept) and the chosen components, from TOML.
+
+A configuration file has up to three tables::
+
+    [parameters]            # any parameter; a list sweeps it
+    radius = [4, 8, 12]
+    bending_stiffness = 0.57
+
+    [components]            # chosen by name from the plugin registry
+    energy_terms = ["bending", "tension", "contact"]
+    driving_protocol = "run_and_tumble"
+    integrator = "explicit_euler"
+    stopgo_detector = "threshold"
+
+    [run]
+    seed = 1
+    realizations = 25
+
+Values are in the units of the parameter table (``softcell params`` prints it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from softcell.core.errors import ConfigError
+from softcell.core.params import ParameterSpec, suggest
+
+DEFAULT_COMPONENTS: dict[str, Any] = {
+    "energy_terms": ["bending", "tension", "contact"],
+    "driving_protocol": "run_and_tumble",
+    "integrator": "explicit_euler",
+    "stopgo_detector": "threshold",
+}
+RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}
+SECTIONS = ("parameters", "components", "run")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """Parameter values (a list value is a sweep), component names by kind, run settings."""
+
+    parameters: dict[str, Any] = field(default_factory=dict)
+    components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
+    run: dict[str, Any] = field(default_factory=dict)
+
+    def updated(self, parameters: Mapping[str, Any] = (), components: Mapping[str, Any] = (),
+                run: Mapping[str, Any] = ()) -> RunConfig:
+        """A copy with some entries replaced (command-line flags over a file)."""
+        return dataclasses.replace(self, parameters={**self.parameters, **dict(parameters)},
+                                   components={**self.components, **dict(components)},
+                                   run={**self.run, **dict(run)})
+
+    def extra_specs(self) -> list[ParameterSpec]:
+        """Parameters declared by registered components (e.g. the detector's ``threshold``)."""
+        from softcell.core.registry import get_registry
+
+        return list(get_registry().parameter_specs().values())
+
+
+def load_config(path: str | os.PathLike[str]) -> RunConfig:
+    """Read a TOML run configuration.
+
+    Raises
+    ------
+    ConfigError
+        For a missing file, bad TOML, an unknown table or key (with a suggestion), or a value
+        of the wrong type. Parameter values are validated later, by :class:`Parameters`.
+    """
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"no such configuration file: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    for section, value in data.items():
+        if section not in SECTIONS:
+            raise ConfigError(f"{path}: unknown table [{section}]{suggest(section, SECTIONS)}; "
+                              f"tables: {', '.join(SECTIONS)}")
+        if not isinstance(value, dict):
+            raise ConfigError(f"{path}: {section} must be a table, [{section}]")
+    components = dict(data.get("components", {}))
+    for kind in components:
+        if kind not in DEFAULT_COMPONENTS:
+            raise ConfigError(f"{path}: unknown component kind {kind!r}"
+                              f"{suggest(kind, DEFAULT_COMPONENTS)}")
+    run = dict(data.get("run", {}))
+    for key, value in run.items():
+        if key not in RUN_KEYS:
+            raise ConfigError(f"{path}: unknown [run] key {key!r}{suggest(key, RUN_KEYS)}")
+        if not isinstance(value, RUN_KEYS[key]) or isinstance(value, bool):
+            raise ConfigError(f"{path}: [run] {key} = {value!r} must be an integer")
+    return RunConfig(parameters=dict(data.get("parameters", {})),
+                     components={**DEFAULT_COMPONENTS, **components}, run=run)

@@ -1,0 +1,199 @@
+"""The simulation Dataset schema, as code (ARCHITECTURE.md, "The data model").
+
+One simulation, or one tracked video, is one :class:`xarray.Dataset` with dims
+``realization``, ``time`` and ``node``. A sweep adds one leading dimension per swept
+parameter (e.g. ``radius``). :func:`validate` names every missing or malformed variable or
+attribute. :func:`simulation_dataset` builds a conforming Dataset from arrays.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from softcell._version import __version__
+from softcell.core.errors import SchemaError
+
+CONVENTIONS = "CF-1.8"
+
+#: bot_phase flag values and meanings (CF flag_values / flag_meanings).
+PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN = -1, 0, 1
+PHASE_FLAGS = np.array([PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN], dtype=np.int8)
+PHASE_MEANINGS = "unknown tumble run"
+
+
+@dataclass(frozen=True)
+class VariableSpec:
+    """One variable of the schema: its dims, dtype kind ('f' float, 'i' integer), CF attributes."""
+
+    name: str
+    dims: tuple[str, ...]
+    kind: str
+    units: str
+    long_name: str
+    attrs: Mapping[str, Any] = field(default_factory=dict)
+
+    def cf_attrs(self) -> dict[str, Any]:
+        return {"units": self.units, "long_name": self.long_name, **self.attrs}
+
+
+COORDINATES: dict[str, VariableSpec] = {
+    v.name: v for v in (
+        VariableSpec("realization", ("realization",), "i", "1", "realization index"),
+        VariableSpec("time", ("time",), "f", "s", "time since the start of the record"),
+        VariableSpec("node", ("node",), "i", "1", "membrane node index"),
+    )
+}
+
+VARIABLES: dict[str, VariableSpec] = {
+    v.name: v for v in (
+        VariableSpec("membrane_x", ("realization", "time", "node"), "f", "cm",
+                     "membrane point x coordinate"),
+        VariableSpec("membrane_y", ("realization", "time", "node"), "f", "cm",
+                     "membrane point y coordinate"),
+        VariableSpec("cell_x", ("realization", "time"), "f", "cm",
+                     "cell geometric center x coordinate"),
+        VariableSpec("cell_y", ("realization", "time"), "f", "cm",
+                     "cell geometric center y coordinate"),
+        VariableSpec("bot_x", ("realization", "time"), "f", "cm", "bot center x coordinate"),
+        VariableSpec("bot_y", ("realization", "time"), "f", "cm", "bot center y coordinate"),
+        VariableSpec("bot_angle", ("realization", "time"), "f", "rad",
+                     "bot heading (major axis direction)"),
+        VariableSpec("bot_phase", ("realization", "time"), "i", "1", "bot driving phase",
+                     {"flag_values": PHASE_FLAGS, "flag_meanings": PHASE_MEANINGS}),
+    )
+}
+
+#: Global attributes every file carries, and those a simulation adds.
+REQUIRED_ATTRS = ("Conventions", "title", "source", "softcell_version", "softcell_origin")
+SIMULATION_ATTRS = ("softcell_parameters", "softcell_parameter_units", "softcell_seed",
+                    "softcell_components")
+ORIGINS = ("simulation", "tracking")
+
+
+def problems(ds: xr.Dataset) -> list[str]:
+    """Every way ``ds`` departs from the schema (empty list: it conforms)."""
+    found: list[str] = []
+    for spec in (*COORDINATES.values(), *VARIABLES.values()):
+        found.extend(_variable_problems(ds, spec))
+    if "time" in ds.coords and ds.sizes.get("time", 0) > 1:
+        if not bool(np.all(np.diff(ds["time"].values) > 0)):
+            found.append("time: values must increase strictly")
+    phase = ds.get("bot_phase")
+    if phase is not None and not np.isin(np.unique(phase.values), PHASE_FLAGS).all():
+        found.append(f"bot_phase: values outside the flag values {PHASE_FLAGS.tolist()}")
+    for name in REQUIRED_ATTRS:
+        if name not in ds.attrs:
+            found.append(f"global attribute {name!r} is missing")
+    if ds.attrs.get("Conventions", CONVENTIONS) != CONVENTIONS:
+        found.append(f"global attribute Conventions must be {CONVENTIONS!r}")
+    origin = ds.attrs.get("softcell_origin")
+    if origin is not None and origin not in ORIGINS:
+        found.append(f"global attribute softcell_origin must be one of {ORIGINS}, not {origin!r}")
+    if origin == "simulation":
+        for name in SIMULATION_ATTRS:
+            if name not in ds.attrs:
+                found.append(f"global attribute {name!r} is missing (required for simulations)")
+    return found
+
+
+def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
+    if spec.name not in ds.variables:
+        return [f"{spec.name}: missing"]
+    var = ds[spec.name]
+    found = []
+    # Sweeps add leading dims (one per swept parameter); the schema's dims must come last.
+    if var.dims[len(var.dims) - len(spec.dims):] != spec.dims:
+        found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(spec.dims)})")
+    if var.dtype.kind not in (spec.kind, "u" if spec.kind == "i" else spec.kind):
+        found.append(f"{spec.name}: dtype {var.dtype}, expected "
+                     + ("floating point" if spec.kind == "f" else "integer"))
+    for attr in ("units", "long_name"):
+        if attr not in var.attrs:
+            found.append(f"{spec.name}: attribute {attr!r} missing")
+    if var.attrs.get("units", spec.units) != spec.units:
+        found.append(f"{spec.name}: units {var.attrs['units']!r}, expected {spec.units!r}")
+    for attr, value in spec.attrs.items():
+        if not np.array_equal(np.asarray(var.attrs.get(attr)), np.asarray(value)):
+            found.append(f"{spec.name}: attribute {attr!r} must be {value!r}")
+    return found
+
+
+def validate(ds: xr.Dataset) -> xr.Dataset:
+    """Return ``ds`` unchanged if it follows the schema.
+
+    Raises
+    ------
+    SchemaError
+        Naming every missing or malformed variable and attribute.
+    """
+    found = problems(ds)
+    if found:
+        raise SchemaError(found)
+    return ds
+
+
+def global_attrs(origin: str, title: str, source: str, **extra: Any) -> dict[str, Any]:
+    """The global attributes every softcell file starts with (no timestamps: same inputs,
+    same bytes)."""
+    return {"Conventions": CONVENTIONS, "title": title, "source": source,
+            "softcell_version": __version__, "softcell_origin": origin, **extra}
+
+
+def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
+                       membrane_x: np.ndarray, membrane_y: np.ndarray,
+                       bot_x: np.ndarray, bot_y: np.ndarray, bot_angle: np.ndarray,
+                       bot_phase: np.ndarray, parameters: Any, seed: int,
+                       components: Mapping[str, Any],
+                       cell_x: np.ndarray | None = None, cell_y: np.ndarray | None = None,
+                       extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+    """Build a simulation Dataset that follows the schema.
+
+    Parameters
+    ----------
+    time : float64[T]
+        Sample times (s).
+    realization : int[R]
+        Realization indices.
+    membrane_x, membrane_y : float64[R, T, M]
+        Membrane points (cm).
+    bot_x, bot_y, bot_angle : float64[R, T]
+        Bot center (cm) and heading (rad).
+    bot_phase : int8[R, T]
+        Driving phase code (0 tumble, 1 run, -1 unknown).
+    parameters : Parameters
+        The run's parameters (stored with units in the attributes).
+    seed : int
+        Root seed of the run.
+    components : mapping
+        Component names by kind, e.g. ``{"energy_terms": [...], "integrator": "..."}``.
+    cell_x, cell_y : float64[R, T], optional
+        Geometric center (cm); by default the algebraic mean of the membrane points.
+    """
+    if cell_x is None:
+        cell_x = membrane_x.mean(axis=-1)
+    if cell_y is None:
+        cell_y = membrane_y.mean(axis=-1)
+    arrays = {"membrane_x": membrane_x, "membrane_y": membrane_y, "cell_x": cell_x,
+              "cell_y": cell_y, "bot_x": bot_x, "bot_y": bot_y, "bot_angle": bot_angle,
+              "bot_phase": np.asarray(bot_phase, dtype=np.int8)}
+    data_vars = {name: (VARIABLES[name].dims, np.asarray(arr), VARIABLES[name].cf_attrs())
+                 for name, arr in arrays.items()}
+    n_nodes = np.shape(membrane_x)[-1]
+    coords = {
+        "realization": ("realization", np.asarray(realization, dtype=np.int64),
+                        COORDINATES["realization"].cf_attrs()),
+        "time": ("time", np.asarray(time, dtype=np.float64), COORDINATES["time"].cf_attrs()),
+        "node": ("node", np.arange(n_nodes, dtype=np.int64), COORDINATES["node"].cf_attrs()),
+    }
+    attrs = global_attrs("simulation", "soft robotic cell simulation",
+                         f"softcell {__version__} simulation",
+                         softcell_seed=int(seed),
+                         softcell_components=json.dumps(dict(components), sort_keys=True),
+                         **parameters.to_attrs(), **dict(extra_attrs or {}))
+    return validate(xr.Dataset(data_vars, coords, attrs))

@@ -1,0 +1,36 @@
+"""The paper's stop/go detector: a sample is *go* when its speed reaches a threshold (SPEC 6).
+
+The paper uses 0.3 cm/s for the experiments and 0.03 cm/s for the simulations; the default is
+the simulations' value.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softcell.core.components import StopGoDetector
+from softcell.core.hookspecs import hookimpl
+from softcell.core.params import ParameterSpec
+
+THRESHOLD = ParameterSpec("threshold", 0.03, "cm s-1",
+                          "speed below which a sample is stop (0.3 for experiments)",
+                          minimum=0.0)
+
+
+class Threshold(StopGoDetector):
+    """Stop where the speed is below ``threshold`` (cm/s), go where it is at or above it."""
+
+    name = "threshold"
+    description = "stop below a speed threshold, go at or above it (the paper's detector)"
+    parameters = (THRESHOLD,)
+
+    def label(self, speed: np.ndarray, interval: float) -> np.ndarray:
+        speed = np.asarray(speed, dtype=np.float64)
+        labels = (speed >= float(self.params["threshold"])).astype(np.int8)
+        labels[np.isnan(speed)] = -1
+        return labels
+
+
+@hookimpl
+def softcell_stopgo_detectors() -> list[type]:
+    return [Threshold]

@@ -1,0 +1,10 @@
+"""Helpers for testing softcell and softcell plugins.
+
+- :func:`registered`: a context manager under which the process-wide registry also holds
+  the given plugin modules or objects (register a plugin for one test, without installing it).
+- :mod:`softcell.testing.strategies`: Hypothesis strategies (needs the ``test`` extra).
+"""
+
+from softcell.core.registry import registered
+
+__all__ = ["registered"]

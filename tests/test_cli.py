@@ -1,0 +1,46 @@
+"""The command line: plugins listing, parameter errors as one line with exit status 2."""
+
+import subprocess
+import sys
+
+from softcell.cli import main
+
+PY = [sys.executable, "-m", "softcell"]
+
+
+def test_plugins_lists_the_four_kinds(capsys):
+    assert main(["plugins"]) == 0
+    out = capsys.readouterr().out
+    for kind in ("energy_term", "driving_protocol", "integrator", "stopgo_detector"):
+        assert f"{kind} (" in out
+    assert "threshold = 0.03 cm s-1" in out
+
+
+def test_bad_parameter_is_one_line_and_status_2():
+    run = subprocess.run([*PY, "params", "--radius", "2.5"], capture_output=True, text=True)
+    assert run.returncode == 2
+    assert run.stderr.strip() == ("softcell: error: parameter radius = 2.5 cm is not allowed: "
+                                  "must be > bot_semi_major = 3 cm")
+    assert "Traceback" not in run.stderr
+
+
+def test_config_file_and_flags(tmp_path, capsys):
+    config = tmp_path / "run.toml"
+    config.write_text("[parameters]\nradius = [4, 8]\ntension = 0.03\nthreshold = 0.3\n")
+    assert main(["params", str(config), "--tension", "0.05"]) == 0
+    out = capsys.readouterr().out
+    assert "4, 8" in out and "0.05" in out and "# 2 parameter points" in out
+    assert "0.3" in out.split("threshold")[1].splitlines()[0]
+    config.write_text("[parameter]\nradius = 4\n")
+    assert main(["params", str(config)]) == 2
+    assert "unknown table [parameter] (did you mean 'parameters'?)" in capsys.readouterr().err
+    config.write_text("radius = \n")
+    assert main(["params", str(config)]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+
+
+def test_import_compiles_nothing_and_skips_heavy_modules():
+    code = ("import sys, softcell; heavy = [m for m in ('numba', 'xarray', 'netCDF4', "
+            "'matplotlib', 'cv2', 'dask') if m in sys.modules]; print(heavy)")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "[]"

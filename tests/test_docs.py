@@ -1,0 +1,25 @@
+"""Meta-tests that keep the plugin documentation honest."""
+
+import inspect
+from pathlib import Path
+
+from softcell.core import hookspecs
+from softcell.core.components import CONTRACTS
+from softcell.core.registry import KINDS
+
+DOC = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
+
+
+def test_every_hook_appears_with_its_signature():
+    hooks = [n for n in dir(hookspecs) if n.startswith("softcell_")]
+    assert sorted(hooks) == sorted(KINDS)
+    for name in hooks:
+        signature = f"{name}{inspect.signature(getattr(hookspecs, name), eval_str=True)}"
+        assert signature in DOC, f"docs/plugins.md lacks `{signature}`"
+
+
+def test_every_contract_method_is_documented():
+    for contract in CONTRACTS.values():
+        assert f"class {contract.__name__}" in DOC
+        for method in sorted(contract.__abstractmethods__):
+            assert f"{method}(" in DOC, f"docs/plugins.md lacks {contract.__name__}.{method}"

@@ -1,0 +1,111 @@
+"""Plugin discovery: built-ins, entry points (good, broken, duplicate), blocking, contracts."""
+
+import importlib.metadata
+import textwrap
+import types
+
+import pytest
+
+import softcell
+from softcell.core.components import StopGoDetector
+from softcell.core.errors import ConfigError, RegistryError
+from softcell.core.registry import KINDS, PluginWarning, Registry, get_registry
+from softcell.testing import registered
+
+
+def fake_entry_points(tmp_path, monkeypatch, **plugins):
+    """Install a fake distribution 'softcell-fake' whose entry points name test modules."""
+    info = tmp_path / "softcell_fake-1.2.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: softcell-fake\nVersion: 1.2\n")
+    lines = "\n".join(f"{name} = fakeplugins.{module}" for name, module in plugins.items())
+    (info / "entry_points.txt").write_text(f"[softcell]\n{lines}\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return [ep for ep in importlib.metadata.entry_points(group="softcell")
+            if ep.dist.name == "softcell-fake"]
+
+
+def test_builtins_register_through_the_hooks():
+    registry = Registry(entry_points=[])
+    assert set(KINDS.values()) == {"energy_term", "driving_protocol", "integrator",
+                                   "stopgo_detector"}
+    entry = registry.entries("stopgo_detector")[0]
+    assert entry.component.name == "threshold"
+    assert entry.origin.startswith("built-in")
+
+
+def test_good_entry_point_is_loaded_with_its_distribution(tmp_path, monkeypatch):
+    eps = fake_entry_points(tmp_path, monkeypatch, good="good")
+    registry = Registry(entry_points=eps)
+    assert registry.names("stopgo_detector") == ["fake_hysteresis", "threshold"]
+    origin = registry.entries("stopgo_detector")[0].origin
+    assert "softcell-fake 1.2" in origin and "good = fakeplugins.good" in origin
+    assert "fake_level" in registry.parameter_specs()
+
+
+def test_broken_entry_point_warns_with_its_distribution_and_is_skipped(tmp_path, monkeypatch):
+    eps = fake_entry_points(tmp_path, monkeypatch, good="good", broken="broken")
+    with pytest.warns(PluginWarning, match=r"'broken' from distribution softcell-fake 1\.2.*"
+                                           r"ImportError: this fake plugin needs"):
+        registry = Registry(entry_points=eps)
+    assert registry.names("stopgo_detector") == ["fake_hysteresis", "threshold"]
+    assert [name for name, _ in registry.skipped] == ["broken"]
+
+
+@pytest.mark.parametrize("module, message", [
+    ("misspelt", "unknown hook 'softcell_energy_term'"),
+    ("malformed", "description must be one non-empty line.*abstract methods not implemented"),
+])
+def test_malformed_plugins_are_skipped_loudly(tmp_path, monkeypatch, module, message):
+    eps = fake_entry_points(tmp_path, monkeypatch, bad=module)
+    with pytest.warns(PluginWarning, match=message):
+        registry = Registry(entry_points=eps)
+    assert registry.names("stopgo_detector") == ["threshold"]
+
+
+def test_duplicate_name_is_an_error_naming_both_origins(tmp_path, monkeypatch):
+    eps = fake_entry_points(tmp_path, monkeypatch, dup="duplicate")
+    with pytest.raises(RegistryError) as info:
+        Registry(entry_points=eps)
+    message = str(info.value)
+    assert "'threshold'" in message
+    assert "built-in (softcell.plugins.threshold)" in message
+    assert "softcell-fake 1.2 (entry point dup = fakeplugins.duplicate)" in message
+
+
+def test_disable_env_blocks_plugins_by_name(tmp_path, monkeypatch):
+    eps = fake_entry_points(tmp_path, monkeypatch, dup="duplicate", broken="broken")
+    monkeypatch.setenv("SOFTCELL_DISABLE_PLUGINS", "threshold, broken")
+    registry = Registry(entry_points=eps)  # neither the clash nor the broken import happens
+    assert registry.entries("stopgo_detector")[0].origin.startswith("softcell-fake") is False
+    assert "softcell-fake" in registry.entries("stopgo_detector")[0].origin
+
+
+def test_unknown_component_name_lists_what_exists():
+    with pytest.raises(ConfigError, match="did you mean 'threshold'.*available: threshold"):
+        Registry(entry_points=[]).get("stopgo_detector", "treshold")
+    with pytest.raises(ConfigError, match="no component kind"):
+        Registry(entry_points=[]).get("detector", "threshold")
+
+
+def test_plugin_registered_for_one_test():
+    class Always(StopGoDetector):
+        name = "always_go"
+        description = "every sample is go"
+
+        def label(self, speed, interval):
+            raise NotImplementedError
+
+    plugin = types.SimpleNamespace(
+        softcell_stopgo_detectors=softcell.hookimpl(lambda: [Always]))
+    with registered(plugin):
+        assert get_registry().get("stopgo_detector", "always_go") is Always
+    assert "always_go" not in get_registry().names("stopgo_detector")
+
+
+def test_hook_docs_mention_units():
+    from softcell.core import hookspecs
+
+    for hook in KINDS:
+        doc = textwrap.dedent(getattr(hookspecs, hook).__doc__)
+        assert "Returns" in doc and "Called once" in doc
