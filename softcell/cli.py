@@ -87,6 +87,28 @@ def _cmd_params(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from softcell.core.ensemble import simulate
+
+    config = _config(args)
+    components = {k: v for k, v in (("driving_protocol", args.protocol),
+                                    ("integrator", args.integrator)) if v}
+    if args.energy_terms:
+        components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]
+    config = config.updated(components=components)
+    run = config.run
+    realizations = args.realizations or run.get("realizations", 1)
+    seed = args.seed if args.seed is not None else run.get("seed", 0)
+    for name, value in (("realizations", realizations), ("workers", args.workers)):
+        if value < 1:
+            raise SoftcellError(f"--{name} = {value} is not allowed: must be >= 1")
+    paths = simulate(config, args.output, realizations=realizations, seed=seed,
+                     workers=args.workers, membrane=not args.free_bot,
+                     progress=not args.quiet)
+    print(f"{len(paths)} files in {args.output}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``softcell`` command."""
     parser = argparse.ArgumentParser(
@@ -101,6 +123,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
     p.set_defaults(func=_cmd_params)
+
+    p = sub.add_parser("simulate", help="simulate an ensemble: parameter points x realizations")
+    p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="directory for the files, one per (parameter point, realization)")
+    p.add_argument("--realizations", type=int, help="realizations per parameter point")
+    p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes")
+    p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
+    p.add_argument("--integrator", help="integrator (default explicit_euler)")
+    p.add_argument("--energy-terms", help="comma-separated energy terms")
+    p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
+    p.set_defaults(func=_cmd_simulate)
     return parser
 
 

@@ -1,0 +1,24 @@
+"""Numerical settings in one place: numba flags, cut-offs, tolerances.
+
+Kernels take their decorator options from here (``@njit(**JIT)``) rather than scattering
+flags through the code.
+"""
+
+from __future__ import annotations
+
+#: Options of every compiled kernel. ``fastmath`` stays off: the explicit reference must be
+#: reproducible to the last bit, and checkpoints must resume to the same bytes.
+JIT: dict[str, object] = {"cache": True, "fastmath": False,
+                          "error_model": "numpy", "nogil": True}
+
+#: Membrane points farther than this many contact lengths lambda from the bot feel no contact
+#: force (exp(-25) ~ 1.4e-11 of the force at contact).
+CONTACT_CUTOFF_LENGTHS = 25.0
+
+#: A run stops with an error when the membrane length departs from l0 by more than this
+#: fraction (the model keeps it within ~0.1 %).
+BLOWUP_LENGTH_FRACTION = 0.05
+
+#: Most safeguarded Newton iterations of the ellipse distance (each at least halves the bracket
+#: when Newton misbehaves, so 200 reach rounding from any start).
+ELLIPSE_ITERATIONS = 200

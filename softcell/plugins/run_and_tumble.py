@@ -1,0 +1,119 @@
+"""Driving protocols of SPEC section 5: run_and_tumble, pivot_run_and_tumble, constant_push.
+
+Runs and tumbles alternate, starting with a run; each lasts an independent U[phase_min,
+phase_max] draw; a tumble turns counterclockwise or clockwise with probability 1/2. The bot
+starts at the membrane center with a uniform heading. The schedule is drawn whole, up front,
+from the realization's Generator.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from softcell.core.components import DrivingProtocol, Schedule
+from softcell.core.config import JIT
+from softcell.core.hookspecs import hookimpl
+from softcell.core.params import MODEL_PARAMETERS as P
+
+TUMBLE, RUN = 0, 1
+
+
+def alternating_schedule(rng: np.random.Generator, duration: float, shortest: float,
+                         longest: float) -> Schedule:
+    """Run, tumble, run, ... with U[shortest, longest] durations covering [0, duration] s;
+    the datum of a tumble is its turn sign (+1 counterclockwise, -1 clockwise)."""
+    count = int(math.ceil(duration / shortest)) + 1
+    lengths = rng.uniform(shortest, longest, count)
+    signs = rng.choice(np.array([-1.0, 1.0]), count)
+    start = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+    keep = start < duration
+    phase = np.where(np.arange(count) % 2 == 0, RUN, TUMBLE).astype(np.int8)
+    data = np.where(phase == TUMBLE, signs, 0.0)
+    return Schedule(start[keep], phase[keep], data[keep])
+
+
+@njit(**JIT)
+def run_and_tumble_drive(phase, data, pose, context, coefficients, out):
+    if phase == RUN:
+        out[0] = coefficients[0] * math.cos(pose[2])
+        out[1] = coefficients[0] * math.sin(pose[2])
+        out[2] = 0.0
+    else:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = data * coefficients[1]
+
+
+@njit(**JIT)
+def pivot_drive(phase, data, pose, context, coefficients, out):
+    # coefficients: F0, T0, gamma_T, gamma_R, d, inner (1.0) or fixed (0.0) side
+    if phase == RUN:
+        run_and_tumble_drive(phase, data, pose, context, coefficients, out)
+        return
+    omega = data * coefficients[1] / coefficients[3]
+    side = data if coefficients[5] > 0.5 else 1.0
+    # The center then moves as omega z x (r - pivot): the free bot turns about the pivot.
+    speed = side * coefficients[4] * omega
+    out[0] = coefficients[2] * speed * math.cos(pose[2])
+    out[1] = coefficients[2] * speed * math.sin(pose[2])
+    out[2] = data * coefficients[1]
+
+
+class RunAndTumble(DrivingProtocol):
+    """Runs at force F0 along the heading; tumbles at torque +-T0 about the bot's center."""
+
+    name = "run_and_tumble"
+    description = "runs (force F0) and tumbles (torque +-T0 about the center), U[tau_l, tau_h]"
+    parameters = (P["drive_force"], P["drive_torque"], P["phase_min"], P["phase_max"])
+
+    def schedule(self, rng, duration):
+        return alternating_schedule(rng, duration, float(self.params["phase_min"]),
+                                    float(self.params["phase_max"]))
+
+    def initial_heading(self, rng):
+        return float(rng.uniform(0.0, 2.0 * np.pi))
+
+    def drive_kernel(self):
+        return run_and_tumble_drive
+
+
+class PivotRunAndTumble(RunAndTumble):
+    """As run_and_tumble, but a tumble turns the bot about a pivot offset along its minor axis."""
+
+    name = "pivot_run_and_tumble"
+    description = ("runs and tumbles about a pivot offset d along the minor axis "
+                   "(inner side of the turn, or fixed), as in the experiments")
+    parameters = (*RunAndTumble.parameters, P["bot_friction"], P["bot_rotational_friction"],
+                  P["pivot_offset"], P["pivot_side"])
+
+    def coefficients(self):
+        inner = 1.0 if self.params["pivot_side"] == "inner" else 0.0
+        return np.append(super().coefficients(), inner)
+
+    def drive_kernel(self):
+        return pivot_drive
+
+
+class ConstantPush(DrivingProtocol):
+    """A permanent run along the initial heading (the paper's calibration of gamma_mem)."""
+
+    name = "constant_push"
+    description = "a permanent run at force F0 along a fixed heading (calibrates gamma_mem)"
+    parameters = (P["drive_force"], P["drive_torque"])
+
+    def schedule(self, rng, duration):
+        return Schedule(np.zeros(1), np.array([RUN], dtype=np.int8), np.zeros(1))
+
+    def initial_heading(self, rng):
+        return float(rng.uniform(0.0, 2.0 * np.pi))
+
+    def drive_kernel(self):
+        return run_and_tumble_drive
+
+
+@hookimpl
+def softcell_driving_protocols() -> list[type]:
+    return [RunAndTumble, PivotRunAndTumble, ConstantPush]
