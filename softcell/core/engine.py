@@ -286,9 +286,15 @@ def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
 def explicit_decay_rate(model: Model) -> float:
     """Largest decay rate lambda_max (1/s) of the linearized explicit membrane update at the
     equilibrium circle (SPEC section 2): the explicit Euler step is stable for dt lambda < 2.
+    """
+    return float(np.max(-np.linalg.eigvals(membrane_jacobian(model)).real))
 
-    The Jacobian of d(Re g, Im g)/dt is built by central differences (2 (2 Lc + 1) force
-    evaluations) and its eigenvalues taken.
+
+def membrane_jacobian(model: Model) -> np.ndarray:
+    """Jacobian (1/s) of d(Re g, Im g)/dt at the equilibrium circle, bot at its center.
+
+    Built by central differences (2 (2 Lc + 1) force evaluations); rows and columns are
+    ordered Re g_{-Lc..Lc}, then Im g_{-Lc..Lc}.
     """
     lc = model.cutoff
     radius = equilibrium_radius(model.params)
@@ -304,4 +310,4 @@ def explicit_decay_rate(model: Model) -> float:
         minus = force_modes(model, base - delta, pose)[0]
         column = model.membrane_mobility * (plus - minus) / (2 * h)
         jac[:size, j], jac[size:, j] = column.real, column.imag
-    return float(np.max(-np.linalg.eigvals(jac).real))
+    return jac

@@ -90,8 +90,11 @@ class PivotRunAndTumble(RunAndTumble):
                   P["pivot_offset"], P["pivot_side"])
 
     def coefficients(self):
-        inner = 1.0 if self.params["pivot_side"] == "inner" else 0.0
-        return np.append(super().coefficients(), inner)
+        """F0 (N), T0 (N cm), gamma_T, gamma_R, pivot offset d (cm), 1.0 inner / 0.0 fixed."""
+        p = self.params
+        return np.array([p.drive_force, p.drive_torque, p.bot_friction,
+                         p.bot_rotational_friction, p.pivot_offset,
+                         1.0 if p.pivot_side == "inner" else 0.0], dtype=np.float64)
 
     def drive_kernel(self):
         return pivot_drive

@@ -63,6 +63,12 @@ def signed_distance_local(px, py, a, b):
     Returns ``(rho, nx, ny)``: rho in the units of a and b; (nx, ny) = grad rho.
     """
     u, v = abs(px), abs(py)
+    # Coordinates 1e-100 of the axes are on the axis to rounding; zeroing them keeps
+    # subnormal numbers (with few significant bits) out of the root finding.
+    if u < 1e-100 * a:
+        u = 0.0
+    if v < 1e-100 * b:
+        v = 0.0
     a2, b2 = a * a, b * b
     if v == 0.0 and u * a < a2 - b2:
         # On the major axis inside the evolute: two closest points, off the axis.
@@ -72,7 +78,7 @@ def signed_distance_local(px, py, a, b):
         qx, qy = 0.0, b
     else:
         s = _root(u, v, a, b)
-        qx = a2 * u / (s + a2 - b2)
+        qx = a2 * u / (s + (a2 - b2))
         qy = b2 * v / s
     nx, ny = qx / a2, qy / b2
     norm = math.sqrt(nx * nx + ny * ny)

@@ -1,0 +1,166 @@
+"""The engine and ensembles: reproducibility, workers, resume, blow-up, plugins, CLI."""
+
+import types
+
+import numpy as np
+import pytest
+from numba import njit
+
+import softcell
+from softcell.cli import main
+from softcell.core.components import EnergyTerm
+from softcell.core.engine import (
+    SimulationError,
+    build_integrator,
+    build_model,
+    circle_modes,
+    force_modes,
+    sample_times,
+    total_energy,
+)
+from softcell.core.ensemble import simulate
+from softcell.core.errors import ParameterError
+from softcell.core.params import Parameters, ParameterSpec
+from softcell.core.runconfig import RunConfig
+from softcell.testing import registered
+
+# A coarse membrane (cutoff 4) is stable at dt = 1e-5 s, which keeps these tests fast.
+COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}
+SHORT = {"radius": [4.0, 12.0], "duration": 0.03, **COARSE}
+
+
+def test_sampling_grid():
+    t = sample_times(Parameters({"duration": 100.5, "sample_switch": 100.0}))
+    assert t[0] == 0 and t[1] == pytest.approx(0.01)
+    assert t[9999] == pytest.approx(99.99) and t[10000] == 100.0 and t[-1] == pytest.approx(100.5)
+    assert np.all(np.diff(t) > 0)
+
+
+def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
+    config = RunConfig(parameters=SHORT)
+    one = simulate(config, tmp_path / "one", realizations=2, seed=5, progress=False)
+    two = simulate(config, tmp_path / "two", realizations=2, seed=5, workers=2, progress=False)
+    assert [p.read_bytes() for p in one] == [p.read_bytes() for p in two]
+    other = simulate(config, tmp_path / "other", realizations=2, seed=6, progress=False)
+    assert one[0].read_bytes() != other[0].read_bytes()
+    ds = softcell.open_dataset(tmp_path / "one")
+    assert ds.sizes["radius"] == 2 and ds.sizes["realization"] == 2
+    softcell.validate(ds)
+
+
+def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
+    config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
+    whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]
+
+    import softcell.core.ensemble as ensemble
+
+    calls = {"n": 0}
+    original = ensemble.run_realization
+
+    def interrupted(*args, **kwargs):
+        def progress(dt):
+            calls["n"] += 1
+            if calls["n"] == 3:
+                raise KeyboardInterrupt  # as if killed after the third sample
+        kwargs["progress"] = progress
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(ensemble, "run_realization", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        simulate(config, tmp_path / "resumed", realizations=1, seed=2, progress=False,
+                 checkpoint_every=0.0)
+    out = tmp_path / "resumed"
+    assert not list(out.glob("*.nc"))  # nothing under a final name
+    assert list(out.glob(".*.ckpt.npz"))
+    monkeypatch.setattr(ensemble, "run_realization", original)
+    resumed = simulate(config, out, realizations=1, seed=2, progress=False)[0]
+    assert resumed.read_bytes() == whole.read_bytes()
+    assert not list(out.glob(".*.ckpt.npz"))
+
+
+def test_blow_up_names_time_realization_and_quantity(tmp_path):
+    config = RunConfig(parameters={"radius": 4.0, "duration": 0.02, "dt": 1e-5,
+                                   "membrane_friction": 1e-6})
+    with pytest.raises((SimulationError, ParameterError)) as info:
+        simulate(config, tmp_path, realizations=1, progress=False)
+    assert "dt" in str(info.value)  # the stability check refuses it up front
+    # Past the stability check, a blow-up is caught while running.
+    params = Parameters({"radius": 4.0, "duration": 0.02, **COARSE})
+    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
+    stepper = build_integrator("explicit_euler", params).build(model)
+    model.membrane_mobility *= 1e4
+    from softcell.core.ensemble import realization_rng, run_realization
+
+    with pytest.raises(SimulationError, match=r"realization 7: (non-finite modes|membrane length)"
+                                              r".* at t = [0-9.e-]+ s"):
+        run_realization(model, stepper, realization_rng(0, 0, 0), label=7)
+    assert not list(tmp_path.glob("*.nc"))
+
+
+def test_unstable_dt_is_refused_with_the_bound():
+    params = Parameters({"radius": 4.0, "cutoff": 20, "dt": 1e-6})
+    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
+    with pytest.raises(ParameterError, match=r"dt = 1e-06 s .* must be < 2 / lambda_max"):
+        build_integrator("explicit_euler", params).build(model)
+
+
+ANCHOR = ParameterSpec("anchor_stiffness", 0.01, "N cm-2", "a test spring to the origin",
+                       minimum=0.0)
+
+
+@njit
+def anchor_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
+                    p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+    kappa = coefficients[0]
+    for n in range(x.size):
+        p0x[n] += kappa * x[n]
+        p0y[n] += kappa * y[n]
+
+
+class Anchor(EnergyTerm):
+    name = "anchor"
+    description = "e = kappa |gamma|^2 / 2: a spring from every point to the origin (a test)"
+    parameters = (ANCHOR,)
+
+    def partials_kernel(self):
+        return anchor_partials
+
+    def density(self, x, y, xp, yp, xpp, ypp, pose):
+        return 0.5 * self.params["anchor_stiffness"] * (x**2 + y**2)
+
+
+def test_third_party_energy_term_works_like_a_builtin(tmp_path):
+    plugin = types.SimpleNamespace(softcell_energy_terms=softcell.hookimpl(lambda: [Anchor]))
+    with registered(plugin):
+        params = Parameters({"radius": 5.0}, [ANCHOR])
+        model = build_model(params, ["bending", "tension", "anchor"], "run_and_tumble")
+        modes = circle_modes(5.0, model.cutoff)
+        modes[model.cutoff] = 0.3 + 0.1j
+        fhat, _ = force_modes(model, modes, np.zeros(3))
+        h = np.zeros_like(modes)
+        h[model.cutoff] = 1e-6
+        d_re = (total_energy(model, modes + h, np.zeros(3))
+                - total_energy(model, modes - h, np.zeros(3))) / 2e-6
+        assert d_re == pytest.approx(-2 * np.pi * fhat[model.cutoff].real, rel=1e-6)
+        # The spring pulls the center back: f_hat_0 = -kappa g_0.
+        assert fhat[model.cutoff] == pytest.approx(-0.01 * (0.3 + 0.1j), rel=1e-9)
+        config = RunConfig(parameters={"radius": 5.0, "duration": 0.02, **COARSE,
+                                       "anchor_stiffness": 0.02},
+                           components={**RunConfig().components,
+                                       "energy_terms": ["bending", "tension", "anchor"]})
+        path = simulate(config, tmp_path, realizations=1, progress=False)[0]
+        ds = softcell.read_dataset(path)
+        assert '"anchor_stiffness": 0.02' in ds.attrs["softcell_parameters"]
+        assert "anchor" in ds.attrs["softcell_components"]
+
+
+def test_cli_simulate_writes_one_file_per_point_and_realization(tmp_path, capsys):
+    assert main(["simulate", "--radius", "4,5", "--duration", "0.02", "--dt", "1e-5",
+                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--realizations", "2", "--quiet", "-o", str(tmp_path)]) == 0
+    assert len(list(tmp_path.glob("*.nc"))) == 4
+    assert main(["simulate", "--radius", "2", "-o", str(tmp_path), "--quiet"]) == 2
+    assert "radius = 2.0 cm" in capsys.readouterr().err
+    assert main(["simulate", "--free-bot", "--duration", "0.02", "--dt", "1e-5", "--quiet",
+                 "-o", str(tmp_path / "free")]) == 0
+    ds = softcell.open_dataset(tmp_path / "free" / "point000_realization0000.nc")
+    assert np.isnan(ds["membrane_x"]).all() and not np.isnan(ds["bot_x"]).any()
