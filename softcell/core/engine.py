@@ -244,6 +244,16 @@ def build_integrator(name: str, params: Parameters) -> Integrator:
     return get_registry().get("integrator", name)(params)
 
 
+def _curve(modes: np.ndarray, n: int) -> np.ndarray:
+    """z, z', z'' (complex128[3, n], cm) at n collocation points, with numpy FFTs."""
+    lc = (modes.size - 1) // 2
+    k = np.arange(-lc, lc + 1)
+    spectrum = np.zeros((3, n), dtype=np.complex128)
+    for order in range(3):
+        spectrum[order, k % n] = (1j * k) ** order * modes
+    return np.fft.ifft(spectrum, axis=1) * n
+
+
 def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Force modes and bot reaction for one state, with numpy FFTs (set-up, checks, tests).
@@ -257,10 +267,7 @@ def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
     """
     n, lc = model.nodes, model.cutoff
     k = np.arange(-lc, lc + 1)
-    spectrum = np.zeros((3, n), dtype=np.complex128)
-    for order in range(3):
-        spectrum[order, k % n] = (1j * k) ** order * modes
-    z, zp, zpp = np.fft.ifft(spectrum, axis=1) * n
+    z, zp, zpp = _curve(modes, n)
     parts = np.zeros((6, n))
     dpose = np.zeros(3)
     model.partials(z.real.copy(), z.imag.copy(), zp.real.copy(), zp.imag.copy(),
@@ -273,11 +280,7 @@ def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
 def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
     """E = (2 pi / N) sum_n e_n over all terms (N cm), from the terms' ``density``."""
     n, lc = model.nodes, model.cutoff
-    k = np.arange(-lc, lc + 1)
-    spectrum = np.zeros((3, n), dtype=np.complex128)
-    for order in range(3):
-        spectrum[order, k % n] = (1j * k) ** order * modes
-    z, zp, zpp = np.fft.ifft(spectrum, axis=1) * n
+    z, zp, zpp = _curve(modes, n)
     e = sum(t.density(z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag, pose)
             for t in model.terms)
     return float(2 * np.pi / n * np.sum(e))
