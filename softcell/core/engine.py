@@ -279,7 +279,7 @@ def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
 
 def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
     """E = (2 pi / N) sum_n e_n over all terms (N cm), from the terms' ``density``."""
-    n, lc = model.nodes, model.cutoff
+    n = model.nodes
     z, zp, zpp = _curve(modes, n)
     e = sum(t.density(z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag, pose)
             for t in model.terms)
