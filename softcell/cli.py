@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from softcell._version import __version__
+from softcell.core.config import CHECKPOINT_EVERY
 from softcell.core.errors import SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig, load_config
@@ -102,9 +103,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     for name, value in (("realizations", realizations), ("workers", args.workers)):
         if value < 1:
             raise SoftcellError(f"--{name} = {value} is not allowed: must be >= 1")
+    if not args.checkpoint_every > 0:
+        raise SoftcellError(f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
+                            "must be > 0 s")
     paths = simulate(config, args.output, realizations=realizations, seed=seed,
                      workers=args.workers, membrane=not args.free_bot,
-                     progress=not args.quiet)
+                     progress=not args.quiet, checkpoint_every=args.checkpoint_every)
     print(f"{len(paths)} files in {args.output}")
     return 0
 
@@ -136,6 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--energy-terms", help="comma-separated energy terms")
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--checkpoint-every", type=float, default=CHECKPOINT_EVERY, metavar="SECONDS",
+                   help="wall seconds between checkpoints of a running realization "
+                        f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
     p.set_defaults(func=_cmd_simulate)
     return parser

@@ -1,5 +1,10 @@
 """The engine and ensembles: reproducibility, workers, resume, blow-up, plugins, CLI."""
 
+import os
+import signal
+import subprocess
+import sys
+import time
 import types
 
 import numpy as np
@@ -156,7 +161,8 @@ def test_third_party_energy_term_works_like_a_builtin(tmp_path):
 
 def test_cli_simulate_writes_one_file_per_point_and_realization(tmp_path, capsys):
     assert main(["simulate", "--radius", "4,5", "--duration", "0.02", "--dt", "1e-5",
-                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--realizations", "2", "--quiet", "-o", str(tmp_path)]) == 0
+                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--realizations", "2",
+                 "--quiet", "-o", str(tmp_path)]) == 0
     assert len(list(tmp_path.glob("*.nc"))) == 4
     assert main(["simulate", "--radius", "2", "-o", str(tmp_path), "--quiet"]) == 2
     assert "radius = 2.0 cm" in capsys.readouterr().err
@@ -164,3 +170,26 @@ def test_cli_simulate_writes_one_file_per_point_and_realization(tmp_path, capsys
                  "-o", str(tmp_path / "free")]) == 0
     ds = softcell.open_dataset(tmp_path / "free" / "point000_realization0000.nc")
     assert np.isnan(ds["membrane_x"]).all() and not np.isnan(ds["bot_x"]).any()
+
+
+def test_kill_9_then_the_same_command_resumes_to_the_same_bytes(tmp_path):
+    flags = ["--radius", "4", "--duration", "8", "--dt", "1e-5", "--cutoff", "4",
+             "--nodes", "64", "--stored-nodes", "16", "--seed", "3", "--quiet"]
+    command = [sys.executable, "-m", "softcell", "simulate", *flags]
+    subprocess.run([*command, "-o", str(tmp_path / "whole")], check=True)
+    out = tmp_path / "killed"
+    killed = [*command, "--checkpoint-every", "0.1", "-o", str(out)]
+    process = subprocess.Popen(killed)
+    deadline = time.monotonic() + 300
+    while not list(out.glob(".*.ckpt.npz")) and process.poll() is None:
+        assert time.monotonic() < deadline, "no checkpoint appeared"
+        time.sleep(0.01)
+    time.sleep(0.15)  # let it run past its first checkpoint
+    assert process.poll() is None, "the run ended before it could be killed"
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    assert not list(out.glob("*.nc")), "a killed run left a file under its final name"
+    subprocess.run(killed, check=True)
+    name = "point000_realization0000.nc"
+    assert (out / name).read_bytes() == (tmp_path / "whole" / name).read_bytes()
+    assert not list(out.glob(".*"))

@@ -22,3 +22,6 @@ BLOWUP_LENGTH_FRACTION = 0.05
 #: Most safeguarded Newton iterations of the ellipse distance (each at least halves the bracket
 #: when Newton misbehaves, so 200 reach rounding from any start).
 ELLIPSE_ITERATIONS = 200
+
+#: Wall seconds between checkpoints of a running realization (``--checkpoint-every``).
+CHECKPOINT_EVERY = 60.0

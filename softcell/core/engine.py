@@ -141,7 +141,8 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
         bot_mobility=np.array([1 / float(params.bot_friction), 1 / float(params.bot_friction),
                                1 / float(params.bot_rotational_friction)]),
         nodes=int(params.nodes), cutoff=int(params.cutoff),
-        names={"energy_terms": list(energy_terms) if membrane else [], "driving_protocol": protocol},
+        names={"energy_terms": list(energy_terms) if membrane else [],
+               "driving_protocol": protocol},
     )
 
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from softcell._version import __version__
+from softcell.core.config import CHECKPOINT_EVERY
 from softcell.core.engine import (
     Model,
     Record,
@@ -36,8 +37,6 @@ from softcell.core.engine import (
 )
 from softcell.core.params import Parameters, expand_sweep
 from softcell.core.runconfig import RunConfig
-
-CHECKPOINT_EVERY = 60.0  # wall seconds
 
 
 @dataclass(frozen=True)

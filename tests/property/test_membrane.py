@@ -102,7 +102,7 @@ def test_forces_are_minus_the_gradient_of_the_discrete_energy(seed, radius, touc
         step = np.zeros(3)
         step[i] = 1e-5
 
-        def energy(j):
+        def energy(j, step=step):
             return total_energy(m, modes, pose + j * step)
 
         diff = (-energy(2) + 8 * energy(1) - 8 * energy(-1) + energy(-2)) / 12e-5

@@ -5,8 +5,8 @@ to (u, v), u, v >= 0, is q = (a^2 u / (t + a^2), b^2 v / (t + b^2)) where t is t
 (-b^2, inf) of F(t) = (a u / (t + a^2))^2 + (b v / (t + b^2))^2 - 1 (Eberly, "Distance from a
 point to an ellipse"). F is decreasing and convex there, and bracketed by
 [max(b v - b^2, a u - a^2), a |p| - b^2]; Newton's method safeguarded by bisection inside that
-bracket converges in a few steps. The distance is taken along the outward normal at q, which keeps it exact to
-rounding for points on or near the ellipse and on or near either axis.
+bracket converges in a few steps. The distance is taken along the outward normal at q, which
+keeps it exact to rounding for points on or near the ellipse and on or near either axis.
 """
 
 from __future__ import annotations
