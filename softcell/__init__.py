@@ -15,6 +15,7 @@ from softcell.core.hookspecs import hookimpl
 from softcell.core.params import Parameters
 
 if TYPE_CHECKING:
+    from softcell.core.analysis import analyze
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.io.schema import validate
 
@@ -25,6 +26,7 @@ __all__ = [
     "SchemaError",
     "SoftcellError",
     "__version__",
+    "analyze",
     "hookimpl",
     "open_dataset",
     "read_dataset",
@@ -37,7 +39,11 @@ _LAZY = {
     "read_dataset": "softcell.io.netcdf",
     "write_dataset": "softcell.io.netcdf",
     "validate": "softcell.io.schema",
+    "analyze": "softcell.core.analysis",
 }
+
+if "xarray" in __import__("sys").modules:  # register ds.softcell now; else when softcell
+    import softcell.core.analysis.accessor  # noqa: F401  first opens or writes a Dataset
 
 
 def __getattr__(name: str) -> Any:

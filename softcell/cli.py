@@ -24,10 +24,11 @@ def _flag(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
-def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec]) -> None:
-    group = parser.add_argument_group(
-        "model parameters", "override the defaults (SPEC section 2); a comma-separated list "
-        "sweeps a parameter")
+def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec],
+                         title: str = "model parameters",
+                         description: str = "override the defaults (SPEC section 2); a "
+                         "comma-separated list sweeps a parameter") -> None:
+    group = parser.add_argument_group(title, description)
     for spec in specs:
         unit = "" if spec.unit == "1" else f" [{spec.unit}]"
         default = "derived" if spec.default is None else spec.default
@@ -113,6 +114,25 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from softcell.core.analysis import analyze
+    from softcell.io.netcdf import open_inputs, write_dataset
+
+    options = {k.removeprefix("param_"): v for k, v in vars(args).items()
+               if k.startswith("param_") and v is not None}
+    ds = open_inputs(args.inputs)
+    result = analyze(ds, options, progress=not args.quiet)
+    path = write_dataset(result, args.output)
+    print(f"analysis of {_describe(ds)} written to {path}")
+    return 0
+
+
+def _describe(ds: Any) -> str:
+    swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
+    points = " x ".join(f"{ds.sizes[d]} {d}" for d in swept)
+    return f"{ds.sizes['realization']} realization(s)" + (f" at {points}" if points else "")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``softcell`` command."""
     parser = argparse.ArgumentParser(
@@ -145,6 +165,18 @@ def build_parser() -> argparse.ArgumentParser:
                         f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
     p.set_defaults(func=_cmd_simulate)
+
+    from softcell.core.analysis.options import ANALYSIS_OPTIONS
+
+    p = sub.add_parser("analyze", help="MSD, stop/go, fits and theory of simulated or tracked "
+                       "files, as one NetCDF file")
+    p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT",
+                   help="NetCDF files or directories of one sweep (softcell simulate / track)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="analysis file (.nc)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_parameter_flags(p, list(ANALYSIS_OPTIONS.values()), "analysis options",
+                         "SPEC section 6; stored in the output file")
+    p.set_defaults(func=_cmd_analyze)
     return parser
 
 

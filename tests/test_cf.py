@@ -8,21 +8,33 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import softcell
 from softcell import write_dataset
+from softcell.core.analysis import analyze
 from softcell.core.params import Parameters
+from softcell.io.netcdf import combine_sweep
 from softcell.io.schema import simulation_dataset
+from softcell.testing.synthetic import stop_and_go_dataset
 
 HERE = Path(__file__).parent / "cf"
 
 
-def test_cfchecks_reports_no_errors(tmp_path):
+def cfchecks(path):
+    """Run the CF checker offline on ``path``; return its report."""
     beside = Path(sys.executable).with_name("cfchecks")
-    cfchecks = str(beside) if beside.exists() else shutil.which("cfchecks")
-    if cfchecks is None:
+    program = str(beside) if beside.exists() else shutil.which("cfchecks")
+    if program is None:
         pytest.fail("cfchecks is not installed: pip install the 'test' extra")
     import compliance_checker
 
     names = Path(compliance_checker.__file__).parent / "data" / "cf-standard-name-table.xml"
+    run = subprocess.run([program, "-s", str(names), "-a", str(HERE / "area-type-table.xml"),
+                          "-r", str(HERE / "standardized-region-list.xml"), str(path)],
+                         capture_output=True, text=True, cwd=path.parent)
+    return run.stdout + run.stderr
+
+
+def test_cfchecks_reports_no_errors(tmp_path):
     rng = np.random.default_rng(0)
     ds = simulation_dataset(
         np.r_[np.arange(5) * 0.01, 0.1 + np.arange(3) * 0.1], np.arange(2),
@@ -31,9 +43,26 @@ def test_cfchecks_reports_no_errors(tmp_path):
         bot_angle=rng.normal(size=(2, 8)), bot_phase=rng.integers(0, 2, size=(2, 8)),
         parameters=Parameters({"radius": 5}), seed=11,
         components={"integrator": "explicit_euler"})
-    path = write_dataset(ds, tmp_path / "sim.nc")
-    run = subprocess.run([cfchecks, "-s", str(names), "-a", str(HERE / "area-type-table.xml"),
-                          "-r", str(HERE / "standardized-region-list.xml"), str(path)],
-                         capture_output=True, text=True, cwd=tmp_path)
-    assert "ERRORS detected: 0" in run.stdout, run.stdout + run.stderr
-    assert "WARNINGS given: 0" in run.stdout, run.stdout
+    report = cfchecks(write_dataset(ds, tmp_path / "sim.nc"))
+    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+
+
+def test_analysis_file_passes_cfchecks_and_reads_back(tmp_path):
+    rng = np.random.default_rng(1)
+    parts = []
+    for radius in (8.0, 10.0):
+        ds = stop_and_go_dataset(rng, 0.01 * np.arange(2000), realizations=2, speed=1.0,
+                                 mean_go=0.3, mean_stop=0.3, radius=radius)
+        parts.extend(ds.isel(realization=[r]).assign_coords(realization=[r]) for r in (0, 1))
+    sweep = combine_sweep(parts)
+    assert sweep.sizes["radius"] == 2
+    written = write_dataset(analyze(sweep, {"discard": 1.0}), tmp_path / "analysis.nc")
+    report = cfchecks(written)
+    assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
+    back = softcell.open_dataset(written)
+    assert list(back.body.values) == ["cell", "bot"]
+    assert back.msd.sel(body="cell").dims == ("radius", "lag")
+    for name, var in back.variables.items():
+        if var.dtype.kind != "S" and name not in ("body", "collapse_variant"):
+            assert "units" in var.attrs and "long_name" in var.attrs, name
+    assert '"discard": 1.0' in back.attrs["softcell_analysis_options"]

@@ -3,6 +3,7 @@
 import subprocess
 import sys
 
+import softcell
 from softcell.cli import main
 
 PY = [sys.executable, "-m", "softcell"]
@@ -44,3 +45,20 @@ def test_import_compiles_nothing_and_skips_heavy_modules():
             "'matplotlib', 'cv2', 'dask') if m in sys.modules]; print(heavy)")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert run.stdout.strip() == "[]"
+
+
+def test_analyze_a_simulated_sweep(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main(["simulate", "--radius", "4,12", "--duration", "0.3", "--dt", "1e-5",
+                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--quiet",
+                 "-o", str(run)]) == 0
+    out = run / "analysis.nc"
+    for _ in range(2):  # the second time, the analysis file in the directory is left out
+        assert main(["analyze", str(run), "-o", str(out), "--discard", "0.05", "--quiet"]) == 0
+    assert "1 realization(s) at 2 radius" in capsys.readouterr().out
+    result = softcell.open_dataset(out)
+    assert list(result.radius.values) == [4.0, 12.0]
+    assert result.msd.sel(body="bot").notnull().all()
+    assert result.attrs["softcell_input_origin"] == "simulation"
+    assert main(["analyze", str(run), "-o", str(out), "--discard", "-2"]) == 2
+    assert "discard = -2.0 s is not allowed" in capsys.readouterr().err

@@ -23,3 +23,14 @@ def test_every_contract_method_is_documented():
         assert f"class {contract.__name__}" in DOC
         for method in sorted(contract.__abstractmethods__):
             assert f"{method}(" in DOC, f"docs/plugins.md lacks {contract.__name__}.{method}"
+
+
+def test_python_examples_in_the_docs_run():
+    import re
+
+    for name in ("analysis.md",):
+        text = (Path(__file__).parents[1] / "docs" / name).read_text()
+        blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+        assert blocks, f"docs/{name} has no python example"
+        for block in blocks:
+            exec(compile(block, f"docs/{name}", "exec"), {})

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.core.errors import SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
 
@@ -26,10 +27,13 @@ DECODE = {"decode_times": False, "decode_timedelta": False}
 
 
 def _encoding(ds: xr.Dataset, complevel: int) -> dict[str, dict[str, Any]]:
-    encoding = {}
+    encoding: dict[str, dict[str, Any]] = {}
     for name, var in ds.data_vars.items():
         if var.ndim > 0 and var.dtype.kind in "fiu":
             encoding[name] = {"zlib": True, "complevel": complevel, "shuffle": True}
+    for name, var in ds.variables.items():
+        if var.dtype.kind in "UO":  # CF: text as char arrays, not netCDF-4 vlen strings
+            encoding[name] = {"dtype": "S1"}
     return encoding
 
 
@@ -58,6 +62,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
+    ds = _to_cf(ds)
     try:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4",
                      encoding=_encoding(ds, complevel))
@@ -70,13 +75,39 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     return path
 
 
+#: Attribute marking the label variable that stands in for a text dimension coordinate.
+LABELS_OF = "softcell_labels_of"
+
+
+def _to_cf(ds: xr.Dataset) -> xr.Dataset:
+    """Text dimension coordinates (e.g. ``body``) become an integer index plus an auxiliary
+    label variable ``<dim>_label``: CF has no text coordinate variables."""
+    for name in [c for c in ds.coords if ds[c].dims == (c,) and ds[c].dtype.kind in "UO"]:
+        attrs = dict(ds[name].attrs)
+        labels = np.asarray(ds[name].values).astype(str)
+        ds = ds.assign_coords({name: (name, np.arange(labels.size), {
+            "units": "1", "long_name": f"{attrs.get('long_name', name)} (index)"})})
+        ds = ds.assign_coords({f"{name}_label": (name, labels, {**attrs, LABELS_OF: name})})
+    return ds
+
+
+def _from_cf(ds: xr.Dataset) -> xr.Dataset:
+    """Undo :func:`_to_cf`: label variables become the text coordinates again."""
+    for name in [v for v in ds.variables if LABELS_OF in ds[v].attrs]:
+        dim = ds[name].attrs[LABELS_OF]
+        attrs = {k: v for k, v in ds[name].attrs.items() if k != LABELS_OF}
+        labels = np.asarray(ds[name].values).astype(str)
+        ds = ds.drop_vars(name).assign_coords({dim: (dim, labels, attrs)})
+    return ds
+
+
 def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     """Read one NetCDF file fully into memory and close it."""
     path = Path(path)
     if not path.is_file():
         raise SoftcellError(f"no such file: {path}")
     with xr.open_dataset(path, engine="netcdf4", **DECODE) as ds:
-        return ds.load()
+        return _from_cf(ds.load())
 
 
 def open_dataset(path: str | os.PathLike[str], *, chunks: Mapping[str, int] | None = None
@@ -101,14 +132,47 @@ def open_dataset(path: str | os.PathLike[str], *, chunks: Mapping[str, int] | No
     """
     path = Path(path)
     if path.is_file():
-        return xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
+        return _from_cf(xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE))
     if not path.is_dir():
         raise SoftcellError(f"no such file or directory: {path}")
-    files = sorted(p for p in path.glob("*.nc") if not p.name.startswith("."))
+    return _combine(_sweep_files(path), chunks)
+
+
+def _sweep_files(directory: Path) -> list[Path]:
+    files = sorted(p for p in directory.glob("*.nc") if not p.name.startswith("."))
     if not files:
-        raise SoftcellError(f"no .nc files in directory {path}")
-    parts = [xr.open_dataset(f, engine="netcdf4", chunks=chunks, **DECODE) for f in files]
-    return combine_sweep(parts, [str(f) for f in files])
+        raise SoftcellError(f"no .nc files in directory {directory}")
+    return files
+
+
+def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.Dataset:
+    """One Dataset from the files of a sweep; analysis files among them are left out (they
+    are results, not records)."""
+    parts, names = [], []
+    for f in files:
+        ds = xr.open_dataset(f, engine="netcdf4", chunks=chunks, **DECODE)
+        if ds.attrs.get("softcell_origin") == "analysis":
+            ds.close()
+            continue
+        parts.append(ds)
+        names.append(str(f))
+    if not parts:
+        raise SoftcellError(f"no simulation or tracking files among {[str(f) for f in files]}")
+    return parts[0] if len(parts) == 1 else combine_sweep(parts, names)
+
+
+def open_inputs(paths: list[str | os.PathLike[str]]) -> xr.Dataset:
+    """Open files and directories (each a sweep, see :func:`open_dataset`) as one Dataset: a
+    single file as is, several files combined along their swept parameters."""
+    files: list[Path] = []
+    for path in map(Path, paths):
+        if path.is_dir():
+            files.extend(_sweep_files(path))
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise SoftcellError(f"no such file or directory: {path}")
+    return _combine(files)
 
 
 def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:
@@ -121,12 +185,25 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
         values.append(json.loads(ds.attrs["softcell_parameters"]))
     keys = sorted(set().union(*values))
     swept = [k for k in keys if len({json.dumps(v.get(k)) for v in values}) > 1]
+    # A parameter derived from another (duration from radius) is no dimension of its own: it
+    # becomes a coordinate along the one it follows.
+    follows: dict[str, str] = {}
+    for key in [k for k in swept if k in MODEL_PARAMETERS and MODEL_PARAMETERS[k].default is None]:
+        for other in [k for k in swept if k != key and k not in follows]:
+            pairs = {(json.dumps(v.get(other)), json.dumps(v.get(key))) for v in values}
+            if len(pairs) == len({a for a, _ in pairs}):
+                follows[key] = other
+                break
+    swept = [k for k in swept if k not in follows]
     units = json.loads(parts[0].attrs.get("softcell_parameter_units", "{}"))
     expanded = []
     for ds, vals in zip(parts, values, strict=True):
         for key in swept:
             ds = ds.expand_dims({key: [vals[key]]})
             ds[key].attrs = _coordinate_attrs(key, units.get(key, "1"))
+        for key, other in follows.items():
+            ds = ds.assign_coords({key: (other, [vals[key]],
+                                         _coordinate_attrs(key, units.get(key, "1")))})
         expanded.append(ds)
     fill = {"bot_phase": np.int8(-1)} if "bot_phase" in parts[0] else {}
     try:
@@ -136,7 +213,7 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
         raise SoftcellError(f"the files do not form one sweep ({exc}); "
                             f"swept parameters: {swept or 'none'}") from None
     merged = dict(values[0])
-    for key in swept:
+    for key in (*swept, *follows):
         merged[key] = sorted({v[key] for v in values})
     combined.attrs["softcell_parameters"] = json.dumps(merged)
     combined.attrs["softcell_swept_parameters"] = " ".join(swept)

@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
+import softcell
 from softcell.core.engine import build_integrator, build_model, membrane_length
-from softcell.core.ensemble import realization_rng, run_realization
+from softcell.core.ensemble import realization_rng, run_realization, simulate
 from softcell.core.params import Parameters
+from softcell.core.runconfig import RunConfig
 
 pytestmark = pytest.mark.slow
 
@@ -30,17 +32,34 @@ def test_constant_push_moves_the_cell_at_the_calibration_speed():
     assert np.abs(lengths / lengths[0] - 1).max() < 1e-3  # within 0.1 % while pushing
 
 
-@pytest.mark.parametrize("radius", [
-    4.0,
-    pytest.param(12.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "open (issue 3): at R = 12 cm one 4 s run gave mean cell speed 0.30 cm/s (target "
-        "<= 0.2; the prototype saw ~0.07) with GC distance 0.72 R (target >= 0.5 R)"))),
-])
-def test_regimes_coupled_at_4_decoupled_at_12(radius):
-    params, cell, bot, speed, lengths = run(radius, "run_and_tumble", 4.0)
-    distance = np.abs(cell - bot).mean()
-    if radius == 4.0:
-        assert speed.mean() >= 1.0 and distance <= 0.35 * radius
-    else:
-        assert speed.mean() <= 0.2 and distance >= 0.5 * radius
-    assert np.abs(lengths / lengths[0] - 1).max() < 1e-3
+def test_regimes_coupled_at_4_decoupled_at_12(tmp_path):
+    """SPEC section 6 regime checks on ensemble means over 5 realizations of 4 s (root seed 0).
+
+    One 4 s run is not enough at R = 12 cm: the cell moves only while the bot presses on it,
+    and whether the bot reaches the membrane in 4 s depends on the draw (single runs, root
+    seeds 0-4, gave mean cell speeds 0.30, 0.18, 0.41, 0.00, 0.07 cm/s).
+    """
+    config = RunConfig(parameters={"radius": [4.0, 12.0], "duration": 4.0})
+    simulate(config, tmp_path, realizations=5, seed=0, workers=2, progress=False)
+    ds = softcell.open_dataset(tmp_path).load()
+    dt = np.diff(ds["time"].values)
+    cell = ds["cell_x"] + 1j * ds["cell_y"]
+    bot = ds["bot_x"] + 1j * ds["bot_y"]
+    speed = np.abs(np.diff(cell.values, axis=-1)) / dt
+    distance = np.abs(cell - bot).mean(("realization", "time")).values
+    mean_speed = speed.mean(axis=(1, 2))
+    radius = ds["radius"].values
+    assert list(radius) == [4.0, 12.0]
+    assert mean_speed[0] >= 1.0 and distance[0] <= 0.35 * 4.0, (mean_speed, distance)
+    assert mean_speed[1] <= 0.2 and distance[1] >= 0.5 * 12.0, (mean_speed, distance)
+    # Length from the stored nodes' Fourier series (64 nodes > 2 cutoff: exact), evaluated on
+    # 1024 points; within 0.1 % of its initial value (SPEC section 3).
+    z = (ds["membrane_x"] + 1j * ds["membrane_y"]).values
+    nodes = z.shape[-1]
+    k = np.fft.fftfreq(nodes, 1 / nodes)
+    dz = np.fft.fft(z, axis=-1) / nodes * 1j * k
+    fine = np.zeros(z.shape[:-1] + (1024,), dtype=complex)
+    fine[..., : nodes // 2] = dz[..., : nodes // 2]
+    fine[..., -(nodes // 2):] = dz[..., nodes // 2:]
+    length = 2 * np.pi * np.abs(np.fft.ifft(fine, axis=-1) * 1024).mean(-1)
+    assert np.abs(length / length[..., :1] - 1).max() < 1e-3

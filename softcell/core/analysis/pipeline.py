@@ -1,0 +1,446 @@
+"""Dataset in, Dataset out: everything the paper computes from trajectories (SPEC section 6).
+
+:func:`analyze` takes a simulation or tracked Dataset (dims ``[sweep dims...,] realization,
+time[, node]``) and returns the analysis Dataset: for each body (``cell``, ``bot``) and each
+sweep point, the MSD against ``lag`` with its standard error, per-sample speed and stop/go
+labels, stop and go durations along ``event``, their means, PDFs of t/<t> and fit to
+exp(-t'), the shift of the means under a moved threshold, ballistic / diffusive /
+confined-square fits, the run-and-tumble theory, the shape index IPR, the bot-cell distance and
+the regime; over a ``radius`` sweep, the scaling-collapse variants with a metric each.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from softcell._version import __version__
+from softcell.core.analysis import fits, stopgo
+from softcell.core.analysis.msd import log_lags, msd_sums
+from softcell.core.analysis.options import analysis_options, options_attrs
+from softcell.core.analysis.series import (
+    decimation,
+    segments,
+    shape_index,
+    speed,
+)
+from softcell.core.errors import SoftcellError
+
+BODIES = ("cell", "bot")
+REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
+#: Regime flags of the ``regime`` variable.
+REGIMES = {"unknown": -1, "coupled": 0, "intermediate": 1, "decoupled": 2}
+#: Scaling-collapse variants (SPEC section 6): MSD * R^a against lag * R^b.
+COLLAPSE_VARIANTS = ((1 / 3, 1.0), (1 / 3, -1.0), (-1 / 3, 1.0), (-1 / 3, -1.0))
+COLLAPSE_GRID = 50
+
+
+def require(ds: xr.Dataset, names: tuple[str, ...] = REQUIRED) -> None:
+    """Raise one SoftcellError naming every variable of ``names`` that ``ds`` lacks."""
+    missing = [n for n in ("time", "realization", *names) if n not in ds.variables]
+    if missing:
+        raise SoftcellError("the analysis needs variable(s) missing from the dataset: "
+                            + ", ".join(missing))
+
+
+def sweep_dims(ds: xr.Dataset) -> list[str]:
+    """The dims of ``cell_x`` before (realization, time): one per swept parameter."""
+    return [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
+
+
+def _points(ds: xr.Dataset, lead: list[str]) -> list[dict[str, int]]:
+    sizes = [ds.sizes[d] for d in lead]
+    return [dict(zip(lead, idx, strict=True)) for idx in np.ndindex(*sizes)] if lead else [{}]
+
+
+def _radius(ds: xr.Dataset, point: Mapping[str, int]) -> float:
+    if "radius" in point:
+        return float(ds["radius"].values[point["radius"]])
+    params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
+    value = params.get("radius")
+    return float(value) if isinstance(value, (int, float)) else np.nan
+
+
+def _detector(name: str, threshold: float | None):
+    from softcell.core.params import Parameters
+    from softcell.core.registry import get_registry
+
+    cls = get_registry().get("stopgo_detector", name)
+    values = {"threshold": threshold} if threshold is not None else {}
+    if values and "threshold" not in {s.name for s in cls.parameters}:
+        raise SoftcellError(f"stop/go detector {name!r} has no parameter 'threshold'")
+    return cls(Parameters(values, cls.parameters))
+
+
+class LagPlan:
+    """Which samples give which lags: short lags (< short_lag_max) from the finest segment,
+    longer lags from the whole record decimated to the coarsest interval (SPEC section 6)."""
+
+    def __init__(self, time: np.ndarray, options: Mapping[str, Any]) -> None:
+        segs = segments(time)
+        if not segs or time.size < 2:
+            raise SoftcellError(f"the record after the discard of {options['discard']:g} s has "
+                                f"{time.size} sample(s); the analysis needs at least 2")
+        self.fine = max(segs, key=lambda s: (-s.interval, s.last - s.first))
+        self.coarse_interval = max(s.interval for s in segs)
+        per_decade = int(options["lags_per_decade"])
+        fraction = float(options["max_lag_fraction"])
+        uniform = len(segs) == 1
+        if uniform:
+            self.fine_lags = log_lags(1, int(fraction * (time.size - 1)), per_decade)
+            self.grid = np.zeros(0, dtype=np.int64)
+            self.coarse_lags = np.zeros(0, dtype=np.int64)
+        else:
+            short = float(options["short_lag_max"])
+            last_short = int(np.ceil(short / self.fine.interval - 1e-9)) - 1
+            last_short = min(last_short, self.fine.last - self.fine.first)
+            self.fine_lags = log_lags(1, last_short, per_decade)
+            self.grid = decimation(time, self.coarse_interval, float(time[0]))
+            first_long = int(np.ceil(short / self.coarse_interval - 1e-9))
+            self.coarse_lags = log_lags(first_long, int(fraction * (self.grid.size - 1)),
+                                        per_decade)
+        self.lag = np.concatenate([self.fine_lags * self.fine.interval,
+                                   self.coarse_lags * self.coarse_interval])
+
+    def sums(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Squared-displacement sums and pair counts at ``self.lag`` for one trajectory."""
+        r = np.stack([x, y], axis=-1)
+        s, c = msd_sums(r[self.fine.samples])
+        parts_s, parts_c = [s[self.fine_lags]], [c[self.fine_lags]]
+        if self.coarse_lags.size:
+            rg = np.where((self.grid >= 0)[:, None], r[np.maximum(self.grid, 0)], np.nan)
+            s, c = msd_sums(rg)
+            parts_s.append(s[self.coarse_lags])
+            parts_c.append(c[self.coarse_lags])
+        return np.concatenate(parts_s), np.concatenate(parts_c)
+
+
+def _ensemble_msd(plan: LagPlan, x: np.ndarray, y: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Pooled MSD over realizations [Rz, T] (sum of squares over sum of pairs), its standard
+    error across realizations, the pairs, and the per-realization MSDs."""
+    sums, pairs = zip(*(plan.sums(xr_, yr_) for xr_, yr_ in zip(x, y, strict=True)),
+                      strict=True)
+    sums, pairs = np.array(sums), np.array(pairs)
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # lags with < 2 realizations
+        each = np.where(pairs > 0, sums / np.where(pairs > 0, pairs, 1), np.nan)
+        total = pairs.sum(axis=0)
+        pooled = np.where(total > 0, sums.sum(axis=0) / np.where(total > 0, total, 1), np.nan)
+        n = np.isfinite(each).sum(axis=0)
+        sem = np.where(n >= 2, np.nanstd(each, axis=0, ddof=1) / np.sqrt(np.maximum(n, 1)),
+                       np.nan)
+    return pooled, sem, total, each
+
+
+def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndarray
+              ) -> np.ndarray:
+    """Collapse metric per variant: mean over a common grid of the standard deviation across
+    curves of log10(MSD R^a) at equal log10(lag R^b), over lags up to ``ends`` (the start of
+    each curve's diffusive window: the ballistic and crossover range). NaN with < 2 curves."""
+    out = np.full(len(COLLAPSE_VARIANTS), np.nan)
+    if len(radii) < 2:
+        return out
+    for k, (a, b) in enumerate(COLLAPSE_VARIANTS):
+        curves = []
+        for m, r, end in zip(msd, radii, ends, strict=True):
+            use = (lag <= end) & np.isfinite(m) & (m > 0)
+            if use.sum() < 2:
+                return out
+            curves.append((np.log10(lag[use] * r**b), np.log10(m[use] * r**a)))
+        lo = max(c[0][0] for c in curves)
+        hi = min(c[0][-1] for c in curves)
+        if not hi > lo:
+            continue
+        grid = np.linspace(lo, hi, COLLAPSE_GRID)
+        ys = np.array([np.interp(grid, cx, cy) for cx, cy in curves])
+        out[k] = float(ys.std(axis=0, ddof=1).mean())
+    return out
+
+
+def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
+            progress: bool = False) -> xr.Dataset:
+    """Analyse a simulation or tracked Dataset (SPEC section 6).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The softcell schema (positions in cm, time in s); a sweep adds leading dims.
+    options : mapping, optional
+        Analysis options (:data:`softcell.core.analysis.options.ANALYSIS_OPTIONS`): discard
+        (s), fit windows (multiples of the mean go time), detector and threshold (cm/s), ...
+    progress : bool
+        Show a progress bar over sweep points.
+
+    Returns
+    -------
+    xarray.Dataset
+        The analysis, with CF attributes on every variable and the options, the input's
+        parameters, seed and components in the global attributes.
+
+    Raises
+    ------
+    SoftcellError
+        Naming every variable the analysis needs that ``ds`` lacks, or a record too short.
+    """
+    from tqdm.auto import tqdm
+
+    opts = analysis_options(options)
+    require(ds)
+    origin = ds.attrs.get("softcell_origin", "simulation")
+    threshold = opts["threshold"]
+    if threshold is None and origin == "tracking" and opts["detector"] == "threshold":
+        threshold = 0.3
+    detector = _detector(opts["detector"], threshold)
+    threshold = detector.params.get("threshold", threshold)
+    shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
+    shifted = [_detector(opts["detector"], threshold + s) if threshold is not None
+               and threshold + s >= 0 else None for s in shifts]
+
+    time_all = np.asarray(ds["time"].values, dtype=np.float64)
+    keep = time_all >= time_all[0] + opts["discard"]
+    time = time_all[keep]
+    plan = LagPlan(time, opts)
+    fine = plan.fine
+    lead = sweep_dims(ds)
+    points = _points(ds, lead)
+    only = segments(time).index(fine) if opts["stopgo_segments"] == "finest" else None
+    n_real = ds.sizes["realization"]
+    n_lag, n_t = plan.lag.size, time.size
+
+    shape = (len(points), len(BODIES))
+    res: dict[str, np.ndarray] = {
+        name: np.full(shape, np.nan) for name in (
+            "mean_speed", "v0_hat", "mean_go_duration", "mean_stop_duration", "go_fraction",
+            "go_ks_statistic", "go_ks_pvalue", "stop_ks_statistic", "stop_ks_pvalue",
+            "ballistic_velocity", "ballistic_velocity_error", "msd_slope", "msd_slope_error",
+            "crossover_time", "confined_diffusion_coefficient", "ballistic_window_end",
+            "diffusive_window_start")}
+    res["go_events"] = np.zeros(shape, dtype=np.int64)
+    res["stop_events"] = np.zeros(shape, dtype=np.int64)
+    msd = np.full((*shape, n_lag), np.nan)
+    msd_sem = np.full((*shape, n_lag), np.nan)
+    msd_pairs = np.zeros((*shape, n_lag))
+    msd_each = np.full((*shape, n_real, n_lag), np.nan)
+    speeds = np.full((*shape, n_real, n_t), np.nan)
+    labels = np.full((*shape, n_real, n_t), -1, dtype=np.int8)
+    shifted_go = np.full((*shape, shifts.size), np.nan)
+    shifted_stop = np.full((*shape, shifts.size), np.nan)
+    ipr = np.full((len(points), n_real, n_t), np.nan)
+    gc_distance = np.full(len(points), np.nan)
+    radius = np.array([_radius(ds, p) for p in points])
+    all_durations: dict[tuple[int, int, int], np.ndarray] = {}
+
+    for i, point in enumerate(tqdm(points, disable=not progress, desc="analysis",
+                                   unit="point")):
+        sel = ds.isel(point) if point else ds
+        pos = {}
+        for b, body in enumerate(BODIES):
+            x = np.asarray(sel[f"{body}_x"].transpose("realization", "time").values)[:, keep]
+            y = np.asarray(sel[f"{body}_y"].transpose("realization", "time").values)[:, keep]
+            pos[body] = (x, y)
+            s = speed(x, y, time)
+            speeds[i, b] = s
+            lab = stopgo.label(detector, s, time)
+            labels[i, b] = lab
+            d = stopgo.durations(lab, time, only)
+            for kind, values in ((stopgo.GO, d.go), (stopgo.STOP, d.stop)):
+                all_durations[(i, b, kind)] = values
+            res["go_events"][i, b], res["stop_events"][i, b] = d.go.size, d.stop.size
+            res["mean_go_duration"][i, b] = d.mean(stopgo.GO)
+            res["mean_stop_duration"][i, b] = d.mean(stopgo.STOP)
+            known = lab[lab >= 0]
+            res["go_fraction"][i, b] = (known == stopgo.GO).mean() if known.size else np.nan
+            for name, values in (("go", d.go), ("stop", d.stop)):
+                stat, p = stopgo.exponential_fit_statistic(values)
+                res[f"{name}_ks_statistic"][i, b], res[f"{name}_ks_pvalue"][i, b] = stat, p
+            for k, det in enumerate(shifted):
+                if det is not None:
+                    dk = stopgo.durations(stopgo.label(det, s, time), time, only)
+                    shifted_go[i, b, k] = dk.mean(stopgo.GO)
+                    shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
+            fine_speed = s[:, fine.first:fine.last]
+            finite = fine_speed[np.isfinite(fine_speed)]
+            res["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
+            res["v0_hat"][i, b] = fits.v0_hat(fine_speed)
+
+            pooled, sem, pairs, each = _ensemble_msd(plan, x, y)
+            msd[i, b], msd_sem[i, b], msd_pairs[i, b], msd_each[i, b] = pooled, sem, pairs, each
+            tau_g = res["mean_go_duration"][i, b]
+            hi = opts["ballistic_window"] * tau_g
+            lo = opts["diffusive_window"] * tau_g
+            res["ballistic_window_end"][i, b], res["diffusive_window_start"][i, b] = hi, lo
+            if np.isfinite(tau_g):
+                v, v_err, _ = fits.ballistic_velocity(plan.lag, pooled, hi)
+                slope, slope_err, _ = fits.msd_slope(plan.lag, pooled, lo)
+                res["ballistic_velocity"][i, b], res["ballistic_velocity_error"][i, b] = v, v_err
+                res["msd_slope"][i, b], res["msd_slope_error"][i, b] = slope, slope_err
+                res["crossover_time"][i, b] = fits.crossover_time(v, slope)
+                res["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
+                    plan.lag, pooled, opts["confined_side"], lo)[0]
+        mx = sel["membrane_x"].transpose("realization", "time", "node")
+        my = sel["membrane_y"].transpose("realization", "time", "node")
+        for r in range(n_real):
+            ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep])
+        (cx, cy), (bx, by) = pos["cell"], pos["bot"]
+        with np.errstate(invalid="ignore"):
+            gc_distance[i] = np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(
+                bx - cx).any() else np.nan
+
+    # Durations along `event`, and PDFs of t/<t> on bins covering every value.
+    n_event = max([v.size for v in all_durations.values()] + [0])
+    durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
+    largest = 0.0
+    for (i, b, kind), values in all_durations.items():
+        durations[kind][i, b, :values.size] = values
+        if values.size and values.mean() > 0:
+            largest = max(largest, float((values / values.mean()).max()))
+    edges = stopgo.pdf_edges(largest)
+    pdfs = {kind: np.full((*shape, edges.size - 1), np.nan) for kind in durations}
+    for (i, b, kind), values in all_durations.items():
+        pdfs[kind][i, b] = stopgo.scaled_pdf(values, edges)
+
+    tau_g = res["mean_go_duration"]
+    theory_slope = 2 * res["v0_hat"] ** 2 * tau_g
+    msd_theory = np.full(msd.shape, np.nan)
+    for i, b in np.ndindex(*shape):
+        if tau_g[i, b] > 0:
+            msd_theory[i, b] = fits.run_and_tumble_msd(plan.lag, res["v0_hat"][i, b], tau_g[i, b])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = gc_distance / radius
+    regime = np.full(len(points), REGIMES["unknown"], dtype=np.int8)
+    regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
+    regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = \
+        REGIMES["intermediate"]
+    regime[ratio >= opts["decoupled_above"]] = REGIMES["decoupled"]
+
+    # Back from points to the sweep dims.
+    lead_shape = tuple(ds.sizes[d] for d in lead)
+
+    def unpoint(a: np.ndarray) -> np.ndarray:
+        return a.reshape(lead_shape + a.shape[1:])
+
+    L = tuple(lead)
+    B = (*L, "body")
+    out = xr.Dataset(coords={
+        "body": ("body", np.array(BODIES), {"long_name": "moving body: cell (membrane GC) or "
+                                            "bot"}),
+        "lag": ("lag", plan.lag, {"units": "s", "long_name": "time lag"}),
+        "realization": ("realization", np.asarray(ds["realization"].values),
+                        {"units": "1", "long_name": "realization index"}),
+        "time": ("time", time, {"units": "s", "long_name": "time since the start of the "
+                                "record"}),
+        "event": ("event", np.arange(n_event), {"units": "1", "long_name": "phase index"}),
+        "scaled_duration": ("scaled_duration", 0.5 * (edges[1:] + edges[:-1]),
+                            {"units": "1", "long_name": "phase duration over its mean, bin "
+                             "center", "bin_width": stopgo.PDF_BIN}),
+        "threshold_shift": ("threshold_shift", shifts,
+                            {"units": "cm s-1", "long_name": "shift of the stop/go threshold"}),
+    })
+    for d in lead:
+        out.coords[d] = (d, ds[d].values, dict(ds[d].attrs))
+    for name, coord in ds.coords.items():  # e.g. duration along radius
+        if name not in lead and coord.dims and set(coord.dims) <= set(lead):
+            out.coords[name] = (coord.dims, coord.values, dict(coord.attrs))
+
+    def put(name, dims, data, units, long_name, **attrs):
+        out[name] = (dims, unpoint(np.asarray(data)), {"units": units, "long_name": long_name,
+                                                       **attrs})
+
+    put("msd", (*B, "lag"), msd, "cm2", "mean-squared displacement, pooled over realizations")
+    put("msd_sem", (*B, "lag"), msd_sem, "cm2",
+        "standard error of the MSD across realizations")
+    put("msd_pairs", (*B, "lag"), msd_pairs, "1", "number of displacement pairs")
+    put("msd_realization", (*B, "realization", "lag"), msd_each, "cm2",
+        "mean-squared displacement of each realization")
+    put("msd_theory", (*B, "lag"), msd_theory, "cm2",
+        "run-and-tumble theory 2 v0_hat^2 (tau <tau_g> - <tau_g>^2 (1 - exp(-tau/<tau_g>)))")
+    put("speed", (*B, "realization", "time"), speeds, "cm s-1",
+        "speed, forward difference within a sampling segment")
+    put("stopgo_label", (*B, "realization", "time"), labels, "1", "stop/go label",
+        flag_values=np.array([-1, 0, 1], dtype=np.int8), flag_meanings="unknown stop go")
+    put("go_duration", (*B, "event"), durations[stopgo.GO], "s",
+        "duration of a complete go phase, (n - 1) dt")
+    put("stop_duration", (*B, "event"), durations[stopgo.STOP], "s",
+        "duration of a complete stop phase, (n - 1) dt")
+    put("go_pdf", (*B, "scaled_duration"), pdfs[stopgo.GO], "1",
+        "probability density of go durations over their mean")
+    put("stop_pdf", (*B, "scaled_duration"), pdfs[stopgo.STOP], "1",
+        "probability density of stop durations over their mean")
+    put("mean_go_duration_shifted", (*B, "threshold_shift"), shifted_go, "s",
+        "mean go duration with the threshold shifted")
+    put("mean_stop_duration_shifted", (*B, "threshold_shift"), shifted_stop, "s",
+        "mean stop duration with the threshold shifted")
+    units = {"mean_speed": ("cm s-1", "mean speed (finest sampling segment)"),
+             "v0_hat": ("cm s-1", "root mean square speed sqrt(mean^2 + variance), stops "
+                        "included (theory's v0 hat)"),
+             "mean_go_duration": ("s", "mean go duration <tau_g>"),
+             "mean_stop_duration": ("s", "mean stop duration <tau_s>"),
+             "go_fraction": ("1", "fraction of labelled samples that are go"),
+             "go_ks_statistic": ("1", "Kolmogorov-Smirnov distance of t/<t> (go) to exp(-t')"),
+             "go_ks_pvalue": ("1", "p-value of go_ks_statistic (fully specified law)"),
+             "stop_ks_statistic": ("1", "Kolmogorov-Smirnov distance of t/<t> (stop) to "
+                                   "exp(-t')"),
+             "stop_ks_pvalue": ("1", "p-value of stop_ks_statistic (fully specified law)"),
+             "ballistic_velocity": ("cm s-1", "v of the fit MSD = v^2 tau^2 at short lags"),
+             "ballistic_velocity_error": ("cm s-1", "standard error of ballistic_velocity"),
+             "msd_slope": ("cm2 s-1", "D hat of the fit MSD = D hat tau at long lags (the "
+                           "paper's D hat)"),
+             "msd_slope_error": ("cm2 s-1", "standard error of msd_slope"),
+             "crossover_time": ("s", "lag where the ballistic and diffusive fits meet"),
+             "confined_diffusion_coefficient": ("cm2 s-1", "D of the confined-square MSD fit "
+                                                "(MSD -> 4 D tau)"),
+             "ballistic_window_end": ("s", "longest lag of the ballistic fit"),
+             "diffusive_window_start": ("s", "shortest lag of the diffusive fit"),
+             "go_events": ("1", "number of complete go phases"),
+             "stop_events": ("1", "number of complete stop phases")}
+    for name, (unit, long_name) in units.items():
+        put(name, B, res[name], unit, long_name)
+    put("diffusion_coefficient", B, res["msd_slope"] / 4, "cm2 s-1",
+        "msd_slope / 4 (MSD -> 4 D tau convention)")
+    put("msd_slope_theory", B, theory_slope, "cm2 s-1",
+        "theory's D hat = 2 v0_hat^2 <tau_g>")
+    put("ipr", (*L, "realization", "time"), ipr, "1",
+        "shape index P / sqrt(A) of the membrane")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a point with no membrane: NaN
+        put("ipr_mean", L, np.nanmean(ipr, axis=(1, 2)), "1", "mean shape index")
+    put("gc_distance", L, gc_distance, "cm", "mean distance between bot and cell GCs")
+    put("gc_distance_ratio", L, ratio, "1", "gc_distance / R")
+    put("regime", L, regime, "1", "dynamical regime from gc_distance_ratio",
+        flag_values=np.array(list(REGIMES.values()), dtype=np.int8),
+        flag_meanings=" ".join(REGIMES))
+    if "radius" in lead and len(lead) == 1:
+        decoupled = regime == REGIMES["decoupled"]
+        metric = _collapse(plan.lag, msd[decoupled, 0], radius[decoupled],
+                           res["diffusive_window_start"][decoupled, 0])
+        names = [f"msd R^{a:+.3g}, lag R^{b:+.3g}" for a, b in COLLAPSE_VARIANTS]
+        out.coords["collapse_variant"] = ("collapse_variant", np.array(names),
+                                          {"long_name": "scaling-collapse variant"})
+        out["collapse_msd_exponent"] = ("collapse_variant", [a for a, _ in COLLAPSE_VARIANTS],
+                                        {"units": "1", "long_name": "exponent a of R^a on "
+                                         "the MSD"})
+        out["collapse_lag_exponent"] = ("collapse_variant", [b for _, b in COLLAPSE_VARIANTS],
+                                        {"units": "1", "long_name": "exponent b of R^b on "
+                                         "the lag"})
+        out["collapse_metric"] = ("collapse_variant", metric, {
+            "units": "1", "long_name": "mean spread (decades) of the rescaled cell MSDs of "
+            "the decoupled radii over the ballistic and crossover lags",
+            "radii": radius[decoupled]})
+    out.attrs = {
+        "Conventions": "CF-1.8", "title": "soft robotic cell analysis",
+        "source": f"softcell {__version__} analysis", "softcell_version": __version__,
+        "softcell_origin": "analysis", "softcell_input_origin": origin,
+        "softcell_detector": opts["detector"],
+        "softcell_threshold": np.nan if threshold is None else float(threshold),
+        **options_attrs(opts),
+        **{k: v for k, v in ds.attrs.items() if k in (
+            "softcell_parameters", "softcell_parameter_units", "softcell_seed",
+            "softcell_components", "softcell_swept_parameters")},
+    }
+    return out
