@@ -127,6 +127,45 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_render(args: argparse.Namespace) -> int:
+    from softcell.io.netcdf import open_inputs
+    from softcell.io.video import render
+
+    ds = open_inputs([args.input])
+    point = dict(item.split("=") for item in args.point.split(",")) if args.point else {}
+    size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+    if size is not None and len(size) != 2:
+        raise SoftcellError(f"--size = {args.size!r} is not allowed: must be WIDTHxHEIGHT")
+    info = render(ds, args.output, realization=args.realization,
+                  point={k: int(v) for k, v in point.items()}, px_per_cm=args.px_per_cm,
+                  fps=args.fps, size=size, start=args.start, end=args.end, noise=args.noise,
+                  blur=args.blur, illumination=args.illumination, seed=args.seed,
+                  progress=not args.quiet)
+    for note in info.notes:
+        print(f"note: {note}")
+    print(f"{info.times.size} frames of {info.frame.width}x{info.frame.height} px written to "
+          f"{info.path}; lower-left corner at {info.frame.x0:.6f},{info.frame.y0:.6f} cm "
+          f"(track it with --px-per-cm {info.frame.px_per_cm:g} "
+          f"--origin={info.frame.x0:.6f},{info.frame.y0:.6f})")
+    return 0
+
+
+def _cmd_track(args: argparse.Namespace) -> int:
+    from softcell.io.netcdf import write_dataset
+    from softcell.io.video import track
+
+    origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
+    if len(origin) != 2:
+        raise SoftcellError(f"--origin = {args.origin!r} is not allowed: must be X,Y in cm")
+    ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,
+               origin=origin, fps=args.fps, nodes=args.nodes, radius=args.radius,
+               progress=not args.quiet)
+    path = write_dataset(ds, args.output)
+    print(f"{ds.sizes['time']} frames tracked, {ds.attrs['softcell_tracking_summary']}, "
+          f"written to {path}")
+    return 0
+
+
 def _describe(ds: Any) -> str:
     swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
     points = " x ".join(f"{ds.sizes[d]} {d}" for d in swept)
@@ -177,6 +216,38 @@ def build_parser() -> argparse.ArgumentParser:
     _add_parameter_flags(p, list(ANALYSIS_OPTIONS.values()), "analysis options",
                          "SPEC section 6; stored in the output file")
     p.set_defaults(func=_cmd_analyze)
+
+    p = sub.add_parser("render", help="a top-view movie of one simulated realization")
+    p.add_argument("input", type=Path, help="simulation file or sweep directory")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="video: .mkv/.avi (lossless, for tracking) or .mp4")
+    p.add_argument("--realization", type=int, default=0)
+    p.add_argument("--point", help="sweep point, e.g. radius=1 (an index)")
+    p.add_argument("--px-per-cm", type=float, default=10.0, help="scale [px/cm] (default 10)")
+    p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    p.add_argument("--size", help="frame size WIDTHxHEIGHT [px] (default: fits the cell)")
+    p.add_argument("--start", type=float, help="first frame time [s]")
+    p.add_argument("--end", type=float, help="last frame time [s]")
+    p.add_argument("--noise", type=float, default=0.0, help="Gaussian noise [grey levels]")
+    p.add_argument("--blur", type=float, default=0.0, help="Gaussian blur [px]")
+    p.add_argument("--illumination", type=float, default=0.0,
+                   help="relative amplitude of uneven illumination")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_render)
+
+    p = sub.add_parser("track", help="track a top-view video into the simulation schema")
+    p.add_argument("video", type=Path)
+    p.add_argument("-o", "--output", type=Path, required=True, help="tracked file (.nc)")
+    p.add_argument("--px-per-cm", type=float, help="scale [px/cm]")
+    p.add_argument("--arena-size", type=float,
+                   help="world width of the frame [cm], to derive the scale")
+    p.add_argument("--origin", help="world position X,Y [cm] of the lower-left corner")
+    p.add_argument("--fps", type=float, help="frame rate [1/s] (default: the file's)")
+    p.add_argument("--nodes", type=int, default=64, help="membrane points (default 64)")
+    p.add_argument("--radius", type=float, help="membrane radius R [cm] (default: estimated)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_track)
     return parser
 
 
