@@ -52,6 +52,14 @@ def test_round_trip_positions_at_10_px_per_cm(simulated, tmp_path, noise, blur, 
     assert float(result.softcell_threshold) == 0.3
 
 
+def test_without_a_head_mark_continuity_and_motion_fix_the_direction(simulated, tmp_path):
+    info = render(simulated, tmp_path / "cell.mkv", px_per_cm=10, fps=30, head_mark=False)
+    tracked = track(tmp_path / "cell.mkv", px_per_cm=10, origin=(info.frame.x0, info.frame.y0))
+    truth = simulated.isel(realization=0).interp(time=info.times)
+    cell, bot, heading = errors(tracked, truth)
+    assert heading <= 3.0 and bot <= 0.05, (cell, bot, heading)
+
+
 def test_a_failed_frame_is_nan_flagged_and_counted(simulated, tmp_path):
     info = render(simulated, tmp_path / "cell.mkv", px_per_cm=10, fps=30, end=0.5)
     reader = cv2.VideoCapture(str(tmp_path / "cell.mkv"))

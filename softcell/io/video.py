@@ -107,7 +107,8 @@ class RenderInfo:
 def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0,
            point: dict[str, int] | None = None, px_per_cm: float = 10.0, fps: float = 30.0,
            size: tuple[int, int] | None = None, start: float | None = None,
-           end: float | None = None, band_width: float = 0.3, noise: float = 0.0,
+           end: float | None = None, band_width: float = 0.3, head_mark: bool = True,
+           noise: float = 0.0,
            blur: float = 0.0, illumination: float = 0.0, seed: int = 0,
            progress: bool = False) -> RenderInfo:
     """Render one realization as a top-view movie.
@@ -130,6 +131,9 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
         the video is reported in ``notes``).
     band_width : float
         Width of the drawn membrane (cm).
+    head_mark : bool
+        Draw the light mark at the bot's head (without it the tracker falls back on
+        continuity and the direction of motion).
     noise, blur, illumination
         Gaussian noise (grey levels), Gaussian blur (px), and the relative amplitude of an
         uneven illumination (a gradient and a vignette).
@@ -202,7 +206,7 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
             state = {name: (1 - w) * arr[k] + w * arr[k + 1]
                      for name, arr in (("mx", mx), ("my", my), ("bx", bx), ("by", by),
                                        ("angle", angle))}
-            image = _draw(frame, background, state, a, b, band_width)
+            image = _draw(frame, background, state, a, b, band_width, head_mark)
             if blur > 0:
                 image = cv2.GaussianBlur(image, (0, 0), blur)
             if noise > 0:
@@ -225,7 +229,7 @@ def _background(frame: Frame, illumination: float) -> np.ndarray:
 
 
 def _draw(frame: Frame, background: np.ndarray, state: dict, a: float, b: float,
-          band_width: float) -> np.ndarray:
+          band_width: float, head_mark: bool = True) -> np.ndarray:
     """One frame as float64 BGR; shapes are drawn on uint8 masks and blended."""
     mx, my = _fine_curve(state["mx"], state["my"], 720)
     u, v = frame.to_pixels(mx, my)
@@ -244,8 +248,9 @@ def _draw(frame: Frame, background: np.ndarray, state: dict, a: float, b: float,
     hx = state["bx"] + 0.6 * a * np.cos(state["angle"])
     hy = state["by"] + 0.6 * a * np.sin(state["angle"])
     mu, mv = frame.to_pixels(hx, hy)
-    cv2.circle(mark, (int(round(float(mu) * SUB)), int(round(float(mv) * SUB))),
-               int(round(0.3 * b * frame.px_per_cm * SUB)), 255, -1, cv2.LINE_AA, SHIFT)
+    if head_mark:
+        cv2.circle(mark, (int(round(float(mu) * SUB)), int(round(float(mv) * SUB))),
+                   int(round(0.3 * b * frame.px_per_cm * SUB)), 255, -1, cv2.LINE_AA, SHIFT)
     image = background.copy()
     for layer, colour in ((bot, BOT), (mark, MARK), (band, BAND)):  # the wall hides the bot
         alpha = layer.astype(np.float64)[..., None] / 255.0
@@ -266,6 +271,7 @@ class TrackResult:
     bot: list[tuple[float, float, float]] = field(default_factory=list)
     membrane: list[np.ndarray] = field(default_factory=list)
     flags: list[int] = field(default_factory=list)
+    marked: list[bool] = field(default_factory=list)
 
 
 def _arclength_resample(points: np.ndarray, count: int) -> np.ndarray:
@@ -302,6 +308,7 @@ class Tracker:
         self.band_level: float | None = None
         self.dark_level: float | None = None
         self.window: tuple[int, int, int, int] | None = None  # x0, y0, x1, y1 (px)
+        self.mark_seen = False  # whether the last frame's head mark fixed the direction
 
     def track(self, image: np.ndarray) -> tuple[int, tuple[float, float], np.ndarray,
                                                 tuple[float, float, float]]:
@@ -380,6 +387,27 @@ class Tracker:
         flag = FLAGS["ok"] if np.isfinite(bot[0]) else FLAGS["bot_lost"]
         return (flag, (float(gc[0]), float(gc[1])), midline, bot), box
 
+    @staticmethod
+    def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, heading: float
+                     ) -> tuple[float | None, float | None]:
+        """Offset of a head mark from the bot's center along and across its axis (px), or
+        (None, None) unless the light region inside the bot looks like the mark: small,
+        on the axis, between the center and an end (gaps where the bot touches the membrane
+        are not marks)."""
+        mm = cv2.moments(mark, binaryImage=True)
+        if mm["m00"] < 3 or mm["m00"] > 0.15 * m["m00"]:
+            return None, None
+        du, dv = mm["m10"] / mm["m00"] - cu, mm["m01"] / mm["m00"] - cv_
+        along = np.cos(heading) * du - np.sin(heading) * dv  # world frame: (du, -dv)
+        across = -np.sin(heading) * du - np.cos(heading) * dv
+        spread = np.linalg.eigvalsh(np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]])
+                                    / m["m00"])
+        semi_minor, semi_major = 2 * np.sqrt(np.maximum(spread, 0.0))
+        if not (0.3 * semi_major <= abs(along) <= 0.9 * semi_major
+                and abs(across) <= 0.35 * semi_minor):
+            return None, None
+        return float(along), float(across)
+
     def _bot(self, image: np.ndarray, inside: np.ndarray, ox: int, oy: int
              ) -> tuple[float, float, float]:
         x, y, w, h = cv2.boundingRect(inside)
@@ -403,11 +431,10 @@ class Tracker:
         cu, cv_ = m["m10"] / m["m00"], m["m01"] / m["m00"]
         axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])  # image frame
         heading = -axis  # world frame, defined modulo pi
-        mark = filled & (1 - dark)
-        mm = cv2.moments(mark, binaryImage=True)
-        if mm["m00"] >= 3:
-            du, dv = mm["m10"] / mm["m00"] - cu, mm["m01"] / mm["m00"] - cv_
-            if np.cos(heading) * du - np.sin(heading) * dv < 0:  # world (du, -dv)
+        along, across = self._mark_offset(filled & (1 - dark), m, cu, cv_, heading)
+        self.mark_seen = along is not None
+        if along is not None:
+            if along < 0:
                 heading += np.pi
         elif self.heading is not None and np.cos(heading - self.heading) < 0:
             heading += np.pi
@@ -416,6 +443,20 @@ class Tracker:
         self.heading = heading
         wx, wy = self.frame.to_world(cu + x + ox, cv_ + y + oy)
         return (float(wx), float(wy), float(heading))
+
+
+def _orient_by_motion(bot: np.ndarray, marked: np.ndarray) -> None:
+    """Fix the head-tail ambiguity of the frames before the first head mark (all frames
+    if none is seen), whose headings only continuity links: the bot runs forward, so if its
+    displacements point against that heading on the whole, turn it by pi (in place)."""
+    first = int(np.argmax(marked)) if marked.any() else len(bot)
+    if first < 2:
+        return
+    part = bot[:first]
+    step = np.diff(part[:, :2], axis=0)
+    along = step[:, 0] * np.cos(part[:-1, 2]) + step[:, 1] * np.sin(part[:-1, 2])
+    if np.nansum(along) < 0:
+        bot[:first, 2] += np.pi
 
 
 def _read_ahead(capture: cv2.VideoCapture, depth: int = 8) -> Iterator[np.ndarray]:
@@ -517,6 +558,7 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
                 result.membrane.append(membrane)
                 result.bot.append(bot)
                 result.flags.append(flag)
+                result.marked.append(tracker.mark_seen and np.isfinite(bot[2]))
                 index += 1
                 bar.update(1)
                 if on_frame:
@@ -527,6 +569,7 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
         raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
     cell = np.array(result.cell)
     bot = np.array(result.bot)
+    _orient_by_motion(bot, np.array(result.marked))
     membrane = np.array(result.membrane)
     flags = np.array(result.flags, dtype=np.int8)
     if radius is None:
