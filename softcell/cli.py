@@ -140,7 +140,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
                   point={k: int(v) for k, v in point.items()}, px_per_cm=args.px_per_cm,
                   fps=args.fps, size=size, start=args.start, end=args.end, noise=args.noise,
                   blur=args.blur, illumination=args.illumination, seed=args.seed,
-                  progress=not args.quiet)
+                  head_mark=not args.no_head_mark, progress=not args.quiet)
     for note in info.notes:
         print(f"note: {note}")
     print(f"{info.times.size} frames of {info.frame.width}x{info.frame.height} px written to "
@@ -233,6 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--illumination", type=float, default=0.0,
                    help="relative amplitude of uneven illumination")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise")
+    p.add_argument("--no-head-mark", action="store_true", help="no mark at the bot's head")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_render)
 
