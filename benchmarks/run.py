@@ -50,8 +50,12 @@ def main(argv: list[str]) -> int:
         result = run_suite(name)
         for row in result["rows"]:
             target = row["target"]
-            met = row["value"] >= target if row.get("higher_is_better") else row["value"] <= target
-            ok = "" if target is None else ("yes" if met else "NO")
+            if target is None:
+                ok = ""
+            else:
+                met = row["value"] >= target if row.get("higher_is_better") \
+                    else row["value"] <= target
+                ok = "yes" if met else "NO"
             print(f"{row['benchmark']:<40} {row['value']:>10.3g} {row['unit']:<9} "
                   f"{'' if target is None else format(target, 'g'):>8} {ok:<3} {row['note']}")
         print(f"{'peak memory, suite ' + name:<40} {result['peak_mib']:>10.0f} {'MiB':<9}")
