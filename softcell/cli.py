@@ -132,12 +132,20 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from softcell.io.video import render
 
     ds = open_inputs([args.input])
-    point = dict(item.split("=") for item in args.point.split(",")) if args.point else {}
-    size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+    try:
+        point = {k: int(v) for k, v in (item.split("=") for item in args.point.split(","))} \
+            if args.point else {}
+    except ValueError:
+        raise SoftcellError(f"--point = {args.point!r} is not allowed: must be NAME=INDEX[,...] "
+                            "(e.g. radius=1)") from None
+    try:
+        size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+    except ValueError:
+        size = ()
     if size is not None and len(size) != 2:
-        raise SoftcellError(f"--size = {args.size!r} is not allowed: must be WIDTHxHEIGHT")
-    info = render(ds, args.output, realization=args.realization,
-                  point={k: int(v) for k, v in point.items()}, px_per_cm=args.px_per_cm,
+        raise SoftcellError(f"--size = {args.size!r} is not allowed: must be WIDTHxHEIGHT px")
+    info = render(ds, args.output, realization=args.realization, point=point,
+                  px_per_cm=args.px_per_cm,
                   fps=args.fps, size=size, start=args.start, end=args.end, noise=args.noise,
                   blur=args.blur, illumination=args.illumination, seed=args.seed,
                   head_mark=not args.no_head_mark, progress=not args.quiet)
@@ -154,7 +162,10 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from softcell.io.netcdf import write_dataset
     from softcell.io.video import track
 
-    origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
+    try:
+        origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
+    except ValueError:
+        origin = ()
     if len(origin) != 2:
         raise SoftcellError(f"--origin = {args.origin!r} is not allowed: must be X,Y in cm")
     ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,

@@ -94,6 +94,16 @@ def test_bad_videos_give_one_clear_error(tmp_path, capsys):
     assert "corrupt" in capsys.readouterr().err
 
 
+def test_bad_render_requests_are_named(simulated, tmp_path):
+    with pytest.raises(SoftcellError, match="realization index 3 is not allowed: 0 .. 0"):
+        render(simulated, tmp_path / "v.mkv", realization=3)
+    with pytest.raises(SoftcellError, match="px_per_cm = 0 is not allowed"):
+        render(simulated, tmp_path / "v.mkv", px_per_cm=0)
+    with pytest.raises(SoftcellError, match="must end in .mkv"):
+        render(simulated, tmp_path / "v.gif")
+    assert not list(tmp_path.iterdir())
+
+
 def test_cli_render_then_track(simulated, tmp_path, capsys):
     sim = tmp_path / "sim.nc"
     softcell.write_dataset(simulated, sim)

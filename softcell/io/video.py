@@ -152,7 +152,13 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
             raise SoftcellError(f"{name} = {value} is not allowed: must be >= 0")
     path = Path(path)
     fourcc = cv2.VideoWriter_fourcc(*_codec(path))
+    for dim, index in {**(point or {}), "realization": realization}.items():
+        if dim not in ds.sizes or not 0 <= index < ds.sizes[dim]:
+            allowed = f"0 .. {ds.sizes[dim] - 1}" if dim in ds.sizes else "not a dimension"
+            raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
     sel = ds.isel(point or {}).isel(realization=realization)
+    if not np.isfinite(np.asarray(sel["membrane_x"].values)).any():
+        raise SoftcellError("this realization has no membrane (a free bot): nothing to render")
     time = np.asarray(sel["time"].values, dtype=np.float64)
     valid = np.isfinite(np.asarray(sel["bot_x"].values))
     time_valid = time[valid]
@@ -191,9 +197,8 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
                       cy - height / (2 * px_per_cm))
     rng = np.random.default_rng(seed)
     background = _background(frame, illumination)
-    writer = cv2.VideoWriter(str(path.with_name(f".{path.stem}.tmp{path.suffix}")), fourcc,
-                             fps, (frame.width, frame.height))
     tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    writer = cv2.VideoWriter(str(tmp), fourcc, fps, (frame.width, frame.height))
     if not writer.isOpened():
         raise SoftcellError(f"cannot open {path} for writing with codec {_codec(path)}")
     from tqdm.auto import tqdm
@@ -389,14 +394,14 @@ class Tracker:
 
     @staticmethod
     def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, heading: float
-                     ) -> tuple[float | None, float | None]:
-        """Offset of a head mark from the bot's center along and across its axis (px), or
-        (None, None) unless the light region inside the bot looks like the mark: small,
+                     ) -> float | None:
+        """Offset of a head mark from the bot's center along its axis (px, signed), or None
+        unless the light region inside the bot looks like the mark: small,
         on the axis, between the center and an end (gaps where the bot touches the membrane
         are not marks)."""
         mm = cv2.moments(mark, binaryImage=True)
         if mm["m00"] < 3 or mm["m00"] > 0.15 * m["m00"]:
-            return None, None
+            return None
         du, dv = mm["m10"] / mm["m00"] - cu, mm["m01"] / mm["m00"] - cv_
         along = np.cos(heading) * du - np.sin(heading) * dv  # world frame: (du, -dv)
         across = -np.sin(heading) * du - np.cos(heading) * dv
@@ -405,8 +410,8 @@ class Tracker:
         semi_minor, semi_major = 2 * np.sqrt(np.maximum(spread, 0.0))
         if not (0.3 * semi_major <= abs(along) <= 0.9 * semi_major
                 and abs(across) <= 0.35 * semi_minor):
-            return None, None
-        return float(along), float(across)
+            return None
+        return float(along)
 
     def _bot(self, image: np.ndarray, inside: np.ndarray, ox: int, oy: int
              ) -> tuple[float, float, float]:
@@ -431,7 +436,7 @@ class Tracker:
         cu, cv_ = m["m10"] / m["m00"], m["m01"] / m["m00"]
         axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])  # image frame
         heading = -axis  # world frame, defined modulo pi
-        along, across = self._mark_offset(filled & (1 - dark), m, cu, cv_, heading)
+        along = self._mark_offset(filled & (1 - dark), m, cu, cv_, heading)
         self.mark_seen = along is not None
         if along is not None:
             if along < 0:
@@ -526,6 +531,8 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     from softcell.io.schema import COORDINATES, VARIABLES, global_attrs, validate
 
     video = Path(video)
+    if nodes < 3:
+        raise SoftcellError(f"nodes = {nodes} is not allowed: must be >= 3")
     if not video.is_file():
         raise SoftcellError(f"no such video file: {video}")
     if video.stat().st_size == 0:
