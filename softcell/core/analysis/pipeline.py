@@ -261,7 +261,8 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
                 res[f"{name}_ks_statistic"][i, b], res[f"{name}_ks_pvalue"][i, b] = stat, p
             for k, det in enumerate(shifted):
                 if det is not None:
-                    dk = stopgo.durations(stopgo.label(det, s, time), time, only)
+                    dk = d if shifts[k] == 0 else stopgo.durations(
+                        stopgo.label(det, s, time), time, only)
                     shifted_go[i, b, k] = dk.mean(stopgo.GO)
                     shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
             fine_speed = s[:, fine.first:fine.last]

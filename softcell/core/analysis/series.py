@@ -36,12 +36,10 @@ def segments(time: np.ndarray) -> list[Segment]:
     steps = np.diff(time)
     if not np.all(steps > 0):
         raise ValueError("time must increase strictly")
-    found, start = [], 0
-    for i in range(1, steps.size + 1):
-        if i == steps.size or abs(steps[i] - steps[start]) > INTERVAL_TOLERANCE * steps[start]:
-            found.append(Segment(start, i, float(np.mean(steps[start:i]))))
-            start = i
-    return found
+    changes = np.flatnonzero(np.abs(np.diff(steps)) > INTERVAL_TOLERANCE * steps[:-1]) + 1
+    bounds = [0, *changes.tolist(), steps.size]
+    return [Segment(a, b, float(np.mean(steps[a:b]))) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                       strict=True)]
 
 
 def segment_index(time: np.ndarray) -> np.ndarray:
