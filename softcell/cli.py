@@ -36,6 +36,18 @@ def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[Parame
                            help=f"{spec.long_name}{unit} (default {default})")
 
 
+def _add_component_flags(parser: argparse.ArgumentParser) -> None:
+    """Flags for the parameters that registered components declare beyond the model's
+    (e.g. rodas4's --atol and --rtol)."""
+    from softcell.core.registry import get_registry
+
+    specs = [s for name, s in get_registry().parameter_specs().items()
+             if name not in MODEL_PARAMETERS]
+    _add_parameter_flags(parser, specs, "component parameters",
+                         "parameters of the registered components (integrators, protocols, "
+                         "energy terms)")
+
+
 def _flag_values(args: argparse.Namespace) -> dict[str, Any]:
     values: dict[str, Any] = {}
     for key, raw in vars(args).items():
@@ -196,6 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("params", help="validate and print the parameters of a configuration")
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
+    _add_component_flags(p)
     p.set_defaults(func=_cmd_params)
 
     p = sub.add_parser("simulate", help="simulate an ensemble: parameter points x realizations")
@@ -206,7 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes")
     p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
-    p.add_argument("--integrator", help="integrator (default explicit_euler)")
+    p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
+                   "paper's scheme, the reference)")
     p.add_argument("--energy-terms", help="comma-separated energy terms")
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -214,6 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wall seconds between checkpoints of a running realization "
                         f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
+    _add_component_flags(p)
     p.set_defaults(func=_cmd_simulate)
 
     from softcell.core.analysis.options import ANALYSIS_OPTIONS

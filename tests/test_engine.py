@@ -71,6 +71,7 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
         return original(*args, **kwargs)
 
     monkeypatch.setattr(ensemble, "run_realization", interrupted)
+    monkeypatch.setattr(ensemble, "SAMPLES_PER_CALL", 1)
     with pytest.raises(KeyboardInterrupt):
         simulate(config, tmp_path / "resumed", realizations=1, seed=2, progress=False,
                  checkpoint_every=0.0)
@@ -85,7 +86,8 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
 
 def test_blow_up_names_time_realization_and_quantity(tmp_path):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.02, "dt": 1e-5,
-                                   "membrane_friction": 1e-6})
+                                   "membrane_friction": 1e-6}).updated(
+        components={"integrator": "explicit_euler"})
     with pytest.raises((SimulationError, ParameterError)) as info:
         simulate(config, tmp_path, realizations=1, progress=False)
     assert "dt" in str(info.value)  # the stability check refuses it up front
@@ -173,7 +175,8 @@ def test_cli_simulate_writes_one_file_per_point_and_realization(tmp_path, capsys
 
 
 def test_kill_9_then_the_same_command_resumes_to_the_same_bytes(tmp_path):
-    flags = ["--radius", "4", "--duration", "8", "--dt", "1e-5", "--cutoff", "4",
+    flags = ["--integrator", "explicit_euler", "--radius", "4", "--duration", "8", "--dt", "1e-5",
+             "--cutoff", "4",
              "--nodes", "64", "--stored-nodes", "16", "--seed", "3", "--quiet"]
     command = [sys.executable, "-m", "softcell", "simulate", *flags]
     subprocess.run([*command, "-o", str(tmp_path / "whole")], check=True)

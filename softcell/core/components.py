@@ -94,6 +94,15 @@ class EnergyTerm(Component):
     kind = "energy_term"
     #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
     couples_bot: ClassVar[bool] = False
+    #: True if the density is a smooth function of gamma, gamma', gamma'' with no length
+    #: scale of its own (bending, tension): its force modes |k| <= Lc are then computed to
+    #: rounding on a coarser grid, and integrators other than the explicit reference may do
+    #: so (``rodas4``'s ``smooth_nodes``). False (the default) keeps the N collocation points,
+    #: as a term with its own short length scale (the contact, lambda = 0.01 cm) needs.
+    smooth: ClassVar[bool] = False
+    #: Highest derivative of gamma the density reads (0, 1 or 2). Integrators may skip
+    #: evaluating higher ones for this term (they are then passed as zeros).
+    derivative_order: ClassVar[int] = 2
 
     @abstractmethod
     def partials_kernel(self) -> Callable[..., None]:
@@ -113,6 +122,29 @@ class EnergyTerm(Component):
         the sum over n of de_n/d(x_bot, y_bot, theta_bot) (N, N, N cm) into ``dpose[0:3]``.
         It must not allocate on the heap and must leave the other entries alone.
         """
+
+    def hessian_kernel(self) -> Callable[..., None] | None:
+        """Return the compiled kernel of the term's second derivatives, or None.
+
+        Linearly implicit integrators (``rodas4``) need the Jacobian of the whole right-hand
+        side. Kernel signature::
+
+            kernel(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hwp, hpp) -> None
+
+        Arrays as in :meth:`partials_kernel`. With w = (x, y, x', y', x'', y''), the kernel
+        *adds* d^2 e_n / dw_a dw_b into ``hww[n, a, b]`` (float64[N, 6, 6], N/cm),
+        d^2 e_n / dw_a d pose_c into ``hwp[n, a, c]`` (float64[N, 6, 3]; N/cm, N/cm, and N
+        for the heading) and sum_n d^2 e_n / d pose_c d pose_d into ``hpp[c, d]``
+        (float64[3, 3]; N/cm, N, N cm). It must not allocate and must leave other entries
+        alone.
+
+        The default, None, selects the documented fallback: central differences of
+        :meth:`partials_kernel` (a term's partials at point n depend on w_n and the pose
+        only, so 2 x 9 kernel calls give every point's Hessian). It is accurate to ~1e-9
+        relative for smooth terms; an analytic kernel is faster, which matters when the
+        term is evaluated at many points.
+        """
+        return None
 
     @abstractmethod
     def density(self, x: np.ndarray, y: np.ndarray, xp: np.ndarray, yp: np.ndarray,

@@ -19,6 +19,9 @@ CONTACT_CUTOFF_LENGTHS = 25.0
 #: fraction (the model keeps it within ~0.1 %).
 BLOWUP_LENGTH_FRACTION = 0.05
 
+#: Points of the trapezoidal membrane length in that check (ample for a 5 % test).
+BLOWUP_CHECK_POINTS = 64
+
 #: Most safeguarded Newton iterations of the ellipse distance (each at least halves the bracket
 #: when Newton misbehaves, so 200 reach rounding from any start).
 ELLIPSE_ITERATIONS = 200

@@ -11,6 +11,7 @@ in rad).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -19,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from softcell.core.components import DrivingProtocol, EnergyTerm, Integrator, Schedule
-from softcell.core.config import BLOWUP_LENGTH_FRACTION
+from softcell.core.config import BLOWUP_CHECK_POINTS, BLOWUP_LENGTH_FRACTION
 from softcell.core.errors import SoftcellError
 from softcell.core.params import Parameters
 from softcell.core.registry import get_registry
@@ -178,11 +179,16 @@ def phase_at(schedule: Schedule, times: np.ndarray) -> np.ndarray:
 def membrane_length(modes: np.ndarray, points: int = 256) -> float:
     """Length (cm) of the curve with these Fourier modes, by the trapezoidal rule (spectrally
     accurate for a trigonometric polynomial)."""
-    lc = (modes.size - 1) // 2
+    zp = (1j * modes) @ _derivative_basis((modes.size - 1) // 2, points)
+    return float(2 * np.pi * np.abs(zp).mean())
+
+
+@functools.lru_cache(maxsize=8)
+def _derivative_basis(lc: int, points: int) -> np.ndarray:
+    """k e^{i k xi_n} for k = -lc..lc (rows) at ``points`` equally spaced xi_n (columns)."""
     k = np.arange(-lc, lc + 1)
     xi = 2 * np.pi * np.arange(points) / points
-    zp = (1j * k * modes) @ np.exp(1j * np.outer(k, xi))
-    return float(2 * np.pi * np.abs(zp).mean())
+    return k[:, None] * np.exp(1j * np.outer(k, xi))
 
 
 class Stepper:
@@ -202,6 +208,22 @@ class Stepper:
         """Advance ``state`` in place to time ``t_end`` (s)."""
         raise NotImplementedError
 
+    def sample(self, state: dict[str, np.ndarray], schedule: Schedule, times: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Advance ``state`` through the increasing ``times`` (s) and return the modes
+        (complex128[K, 2 Lc + 1], cm) and poses (float64[K, 3]) there.
+
+        The default calls :meth:`advance` once per time; an integrator whose calls cost more
+        than its steps (one compiled call per sample) overrides it. Either way the result must
+        not depend on how the times are split between calls.
+        """
+        modes = np.empty((len(times), state["modes"].size), dtype=np.complex128)
+        pose = np.empty((len(times), 3))
+        for i, t in enumerate(times):
+            self.advance(state, schedule, float(t))
+            modes[i], pose[i] = state["modes"], state["pose"]
+        return modes, pose
+
 
 @dataclass
 class Record:
@@ -211,23 +233,38 @@ class Record:
     modes: np.ndarray  # complex128[T, 2 Lc + 1]
     pose: np.ndarray  # float64[T, 3]
     phase: np.ndarray  # int8[T]
+    state: dict[str, np.ndarray] | None = None  # the integrator's state after the last sample
 
 
-def check_state(state: dict[str, np.ndarray], model: Model, realization: object) -> None:
+def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
+                times: np.ndarray | None = None, modes: np.ndarray | None = None,
+                pose: np.ndarray | None = None) -> None:
     """Raise :class:`SimulationError` on a non-finite value or a membrane length off by more
-    than BLOWUP_LENGTH_FRACTION of l0, naming the time, the realization and the quantity."""
-    t = float(state["time"][0])
-    for name in ("modes", "pose"):
-        if not np.all(np.isfinite(state[name])):
+    than BLOWUP_LENGTH_FRACTION of l0, naming the time, the realization and the quantity.
+
+    ``times``, ``modes`` and ``pose`` (float64[K], complex128[K, 2 Lc + 1], float64[K, 3]), if
+    given, are the samples recorded since the last check, which are checked instead of the
+    state.
+    """
+    if times is None:
+        times, modes, pose = state["time"], state["modes"][None], state["pose"][None]
+    for name, values in (("modes", modes), ("pose", pose)):
+        bad = ~np.all(np.isfinite(values), axis=-1)
+        if bad.any():
+            t = float(times[np.argmax(bad)])
             raise SimulationError(f"realization {realization}: non-finite {name} at t = {t:g} s "
                                   "(the run blew up; reduce dt or tighten the tolerances)")
     if model.has_membrane:
         l0 = model.params.membrane_length
-        length = membrane_length(state["modes"])
-        if abs(length / l0 - 1) > BLOWUP_LENGTH_FRACTION:
+        lengths = 2 * np.pi * np.abs((1j * modes) @ _derivative_basis(
+            model.cutoff, BLOWUP_CHECK_POINTS)).mean(axis=-1)
+        bad = np.abs(lengths / l0 - 1) > BLOWUP_LENGTH_FRACTION
+        if bad.any():
+            i = int(np.argmax(bad))
             raise SimulationError(
-                f"realization {realization}: membrane length {length:.6g} cm at t = {t:g} s is "
-                f"off l0 = {l0:.6g} cm by more than {BLOWUP_LENGTH_FRACTION:.0%}")
+                f"realization {realization}: membrane length {lengths[i]:.6g} cm at "
+                f"t = {times[i]:g} s is off l0 = {l0:.6g} cm by more than "
+                f"{BLOWUP_LENGTH_FRACTION:.0%}")
 
 
 def initial_state(model: Model, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray,

@@ -62,6 +62,11 @@ def realization_rng(seed: int, point: int, realization: int) -> np.random.Genera
         np.random.SeedSequence(seed, spawn_key=(point, realization))))
 
 
+#: Samples handed to the stepper per call (progress, checks and checkpoints happen between
+#: calls): 1 s of simulated time at the paper's early sampling.
+SAMPLES_PER_CALL = 100
+
+
 def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
                     label: object = 0, checkpoint: Path | None = None,
                     fingerprint: str = "", checkpoint_every: float = CHECKPOINT_EVERY,
@@ -92,17 +97,20 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
             if progress:
                 progress(float(times[first - 1]))
     last_save = time.monotonic()
-    for i in range(first, times.size):
-        if i > 0:
-            stepper.advance(state, schedule, float(times[i]))
-            if progress:
-                progress(float(times[i] - times[i - 1]))
+    if first == 0:
         check_state(state, model, label)
-        rec_modes[i], rec_pose[i] = state["modes"], state["pose"]
+        rec_modes[0], rec_pose[0] = state["modes"], state["pose"]
+        first = 1
+    for i in range(first, times.size, SAMPLES_PER_CALL):
+        j = min(i + SAMPLES_PER_CALL, times.size)
+        rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
+        check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
+        if progress:
+            progress(float(times[j - 1] - times[i - 1]))
         if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
-            _save_checkpoint(checkpoint, fingerprint, i + 1, rec_modes, rec_pose, state)
+            _save_checkpoint(checkpoint, fingerprint, j, rec_modes, rec_pose, state)
             last_save = time.monotonic()
-    return Record(times, rec_modes, rec_pose, phase_at(schedule, times))
+    return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
 
 
 def _save_checkpoint(path: Path, fingerprint: str, next_sample: int, rec_modes: np.ndarray,

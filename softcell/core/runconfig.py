@@ -9,7 +9,7 @@ A configuration file has up to three tables::
     [components]            # chosen by name from the plugin registry
     energy_terms = ["bending", "tension", "contact"]
     driving_protocol = "run_and_tumble"
-    integrator = "explicit_euler"
+    integrator = "rodas4"
     stopgo_detector = "threshold"
 
     [run]
@@ -35,7 +35,7 @@ from softcell.core.params import ParameterSpec, suggest
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],
     "driving_protocol": "run_and_tumble",
-    "integrator": "explicit_euler",
+    "integrator": "rodas4",
     "stopgo_detector": "threshold",
 }
 RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}

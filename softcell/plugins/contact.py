@@ -55,16 +55,74 @@ def contact_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
         dpose[2] += w * (dx * gy - dy * gx)
 
 
+@njit(**JIT)
+def contact_hessian(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hwp, hpp):
+    # e = S exp(-rho / lambda) with rho(gamma, r_bot, theta). With n the outward normal and
+    # t = z x n the tangent at the closest point q, kappa the ellipse's curvature there,
+    # kk = kappa / (1 + kappa rho) and d = gamma - r_bot:
+    #   rho_gamma = n, rho_r = -n, rho_theta = tau = n_x d_y - n_y d_x,
+    #   rho_gamma_gamma = kk t t^T = rho_rr = -rho_gamma_r,
+    #   rho_gamma_theta = t (1 - kk n.d) = -rho_r_theta, rho_theta_theta = kk (n.d)^2 - n.d,
+    # and d2e = (S / lambda) exp(-rho / lambda) (rho_i rho_j / lambda - rho_ij).
+    amplitude, length = coefficients[0], coefficients[1]
+    l0, a, b = context[0], context[1], context[2]
+    cutoff = CONTACT_CUTOFF_LENGTHS * length
+    reach2 = (a + cutoff) ** 2
+    scaled2 = (1.0 + cutoff / b) ** 2
+    scale = l0 / (2.0 * math.pi) * amplitude / length
+    a2b2 = a * a * b * b
+    bx, by, theta = pose[0], pose[1], pose[2]
+    c, s = math.cos(theta), math.sin(theta)
+    for n in range(x.size):
+        dx, dy = x[n] - bx, y[n] - by
+        if dx * dx + dy * dy > reach2:
+            continue
+        px = c * dx + s * dy
+        py = -s * dx + c * dy
+        if (px / a) ** 2 + (py / b) ** 2 > scaled2:
+            continue
+        rho, nx, ny = signed_distance_local(px, py, a, b)
+        if rho > cutoff:
+            continue
+        qx, qy = px - rho * nx, py - rho * ny
+        kappa = 1.0 / (a2b2 * ((qx / (a * a)) ** 2 + (qy / (b * b)) ** 2) ** 1.5)
+        kk = kappa / (1.0 + kappa * rho)
+        gx, gy = c * nx - s * ny, s * nx + c * ny
+        tx, ty = -gy, gx
+        nd = gx * dx + gy * dy
+        tau = gx * dy - gy * dx
+        rgt = 1.0 - kk * nd
+        w = scale * math.exp(-rho / length)
+        il = 1.0 / length
+        g = (gx, gy)
+        t = (tx, ty)
+        for i in range(2):
+            for j in range(2):
+                h = w * (g[i] * g[j] * il - kk * t[i] * t[j])
+                hww[n, i, j] += h
+                hwp[n, i, j] -= h
+                hpp[i, j] += h
+            m = w * (g[i] * tau * il - t[i] * rgt)
+            hwp[n, i, 2] += m
+            hpp[i, 2] -= m
+            hpp[2, i] -= m
+        hpp[2, 2] += w * (tau * tau * il - (kk * nd * nd - nd))
+
+
 class Contact(EnergyTerm):
     """Soft repulsion between the membrane and the elliptical bot."""
 
     name = "contact"
     description = "bot-membrane repulsion (l0/2pi) A exp(-rho/lambda) (SI:EQ:Eint)"
     parameters = (MODEL_PARAMETERS["contact_amplitude"], MODEL_PARAMETERS["contact_length"])
+    derivative_order = 0
     couples_bot = True
 
     def partials_kernel(self):
         return contact_partials
+
+    def hessian_kernel(self):
+        return contact_hessian
 
     def density(self, x, y, xp, yp, xpp, ypp, pose):
         p = self.params

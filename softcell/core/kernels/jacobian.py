@@ -1,0 +1,319 @@
+"""The Jacobian of the coupled membrane-bot right-hand side, from the energy terms' pointwise
+second derivatives (SPEC section 3; docs/plugins.md, "Jacobians").
+
+Unknowns, in order: Re g_k and Im g_k for k = -Lc..Lc (cm), then the bot's x, y (cm) and
+heading (rad); ``n_u = 2 (2 Lc + 1) + 3``. The right-hand side is
+dg_k/dt = mu f_hat_k with mu = 2 pi / (gamma_mem l0), and
+d pose_c/dt = (drive_c - (2 pi / N) dpose_c) / gamma_c.
+
+Per point n, the energy terms supply the Hessian of e_n in w = (x, y, x', y', x'', y'')
+(``hww[n, a, b]``), the mixed derivatives in w and the pose (``hwp[n, a, c]``) and the summed
+pose-pose block (``hpp[c, d]``). Writing the 2 x 2 block of orders (alpha, beta) in complex form,
+delta P^alpha = A delta z^beta + B conj(delta z^beta) with
+A = (h_xx + h_yy)/2 + i (h_yx - h_xy)/2 and B = (h_xx - h_yy)/2 + i (h_yx + h_xy)/2,
+the force modes respond as
+
+    delta f_hat_k = sum_j [ cal_A_kj delta g_j + cal_B_kj conj(delta g_j) ],
+    cal_A_kj = sum_{alpha, beta} c_alpha(k) (i k_j)^beta A_hat_{alpha beta}(k - k_j),
+    cal_B_kj = sum_{alpha, beta} c_alpha(k) conj((i k_j)^beta) B_hat_{alpha beta}(k + k_j),
+
+with c_0 = -1, c_1 = i k, c_2 = k^2 and X_hat(m) = N^-1 sum_n X_n e^{-i m xi_n}: a handful of
+FFTs instead of one force evaluation per unknown. Blocks that vanish everywhere are skipped;
+blocks nonzero at a few points only (the contact) are transformed by direct sums.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from rocket_fft import c2c
+
+from softcell.core.config import JIT
+
+#: Blocks nonzero at no more than this many points are transformed by direct sums, not FFTs.
+SPARSE_POINTS = 48
+
+
+@njit(**JIT)
+def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
+    """out[m - lo] = N^-1 sum_n buf[n] e^{-i m xi_n} for m = lo..hi; ``index[:count]`` lists
+    the points where ``buf`` may be nonzero (all of them when count == N)."""
+    n = buf.size
+    if count <= SPARSE_POINTS:
+        inv = 1.0 / n
+        for m in range(lo, hi + 1):
+            s = 0.0 + 0.0j
+            for t in range(count):
+                i = index[t]
+                s += buf[i] * twiddle[(m * i) % n]
+            out[m - lo] = s * inv
+    else:
+        axes = np.zeros(1, dtype=np.int64)
+        c2c(buf, scratch, axes, True, 1.0 / n, 1)
+        for m in range(lo, hi + 1):
+            out[m - lo] = scratch[m % n]
+
+
+@njit(**JIT)
+def _order_factor(order, k):
+    """(i k)^order for order 0, 1, 2."""
+    if order == 0:
+        return 1.0 + 0.0j
+    if order == 1:
+        return 1j * k
+    return -(k * k) + 0.0j
+
+
+@njit(**JIT)
+def _force_factor(order, k):
+    """c_order(k): the factor of P_hat^order in f_hat_k (-1, i k, k^2)."""
+    if order == 0:
+        return -1.0 + 0.0j
+    if order == 1:
+        return 1j * k
+    return (k * k) + 0.0j
+
+
+@njit(**JIT)
+def active_points(hww, hwp, active):
+    """Write into ``active`` the points where any second derivative is nonzero; return how
+    many there are."""
+    n = hww.shape[0]
+    n_active = 0
+    flat_w = hww.reshape(n * 36)
+    flat_p = hwp.reshape(n * 18)
+    for i in range(n):
+        total = 0.0
+        for a in range(36):
+            total += abs(flat_w[36 * i + a])
+        for a in range(18):
+            total += abs(flat_p[18 * i + a])
+        if total != 0.0:
+            active[n_active] = i
+            n_active += 1
+    return n_active
+
+
+@njit(**JIT)
+def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index, active,
+                      n_active, buf_a, buf_b, scratch, a_hat, b_hat, g_hat, cal_a, cal_b,
+                      factors, orders, jac):
+    """Add to ``jac`` (float64[n_u, n_u], 1/s) the energy terms' part of the Jacobian, from
+    their pointwise second derivatives at the N = len(hww) points of one grid, and reset
+    ``hww, hwp, hpp`` to zero (they must be zero before the terms add into them).
+    ``active[:n_active]`` lists the points where they may be nonzero (see
+    :func:`active_points`).
+
+    ``twiddle``: complex128[N], e^{-2 pi i n / N}. The rest are scratch arrays: ``index``
+    int64[N];
+    ``buf_a, buf_b, scratch`` complex128[N]; ``a_hat, b_hat`` complex128[4 Lc + 1]; ``g_hat``
+    complex128[2 Lc + 1]; ``cal_a, cal_b`` complex128[2 Lc + 1, 2 Lc + 1]; ``factors, orders``
+    complex128[3, 2 Lc + 1].
+    """
+    n = hww.shape[0]
+    m_count = 2 * lc + 1
+    for o in range(3):
+        for i in range(m_count):
+            factors[o, i] = _force_factor(o, i - lc)
+            orders[o, i] = _order_factor(o, i - lc)
+    base = 2 * m_count
+    weight = 2.0 * math.pi / n
+    cal_a[:, :] = 0.0
+    cal_b[:, :] = 0.0
+    # The Hessian is symmetric: block (beta, alpha) is the transpose of (alpha, beta), so
+    # A_{beta alpha} = conj(A_{alpha beta}) and B_{beta alpha} = B_{alpha beta}; the
+    # upper blocks serve both.
+    for al in range(3):
+        for be in range(al, 3):
+            count = 0
+            for t in range(n_active):
+                i = active[t]
+                if (hww[i, 2 * al, 2 * be] != 0.0 or hww[i, 2 * al, 2 * be + 1] != 0.0
+                        or hww[i, 2 * al + 1, 2 * be] != 0.0
+                        or hww[i, 2 * al + 1, 2 * be + 1] != 0.0):
+                    index[count] = i
+                    count += 1
+            if count == 0:
+                continue
+            if count > SPARSE_POINTS:
+                count = n
+                for i in range(n):
+                    index[i] = i
+                buf_a[:] = 0.0
+                buf_b[:] = 0.0
+            for t in range(count):
+                i = index[t]
+                hxx = hww[i, 2 * al, 2 * be]
+                hxy = hww[i, 2 * al, 2 * be + 1]
+                hyx = hww[i, 2 * al + 1, 2 * be]
+                hyy = hww[i, 2 * al + 1, 2 * be + 1]
+                buf_a[i] = complex(0.5 * (hxx + hyy), 0.5 * (hyx - hxy))
+                buf_b[i] = complex(0.5 * (hxx - hyy), 0.5 * (hyx + hxy))
+            _transform(buf_a, index, count, twiddle, -2 * lc, 2 * lc, scratch, a_hat)
+            _transform(buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, b_hat)
+            for i in range(m_count):
+                ca = factors[al, i]
+                cb = factors[be, i]
+                for j in range(m_count):
+                    # (i k_j)^beta = orders[beta, j]
+                    pa = orders[al, j]
+                    pb = orders[be, j]
+                    ah = a_hat[i - j + 2 * lc]
+                    bh = b_hat[i + j]
+                    va = ca * pb * ah
+                    vb = ca * pb.conjugate() * bh
+                    if be != al:
+                        va += cb * pa * a_hat[j - i + 2 * lc].conjugate()
+                        vb += cb * pa.conjugate() * bh
+                    cal_a[i, j] += va
+                    cal_b[i, j] += vb
+    for i in range(m_count):
+        for j in range(m_count):
+            s = cal_a[i, j] + cal_b[i, j]
+            d = cal_a[i, j] - cal_b[i, j]
+            jac[i, j] += mobility * s.real
+            jac[m_count + i, j] += mobility * s.imag
+            jac[i, m_count + j] -= mobility * d.imag
+            jac[m_count + i, m_count + j] += mobility * d.real
+    for al in range(3):
+        for c in range(3):
+            count = 0
+            for t in range(n_active):
+                i = active[t]
+                if hwp[i, 2 * al, c] != 0.0 or hwp[i, 2 * al + 1, c] != 0.0:
+                    index[count] = i
+                    count += 1
+            if count == 0:
+                continue
+            if count > SPARSE_POINTS:
+                count = n
+                for i in range(n):
+                    index[i] = i
+            for t in range(count):
+                i = index[t]
+                buf_a[i] = complex(hwp[i, 2 * al, c], hwp[i, 2 * al + 1, c])
+            _transform(buf_a, index, count, twiddle, -lc, lc, scratch, g_hat)
+            for i in range(m_count):
+                v = factors[al, i] * g_hat[i]
+                jac[i, base + c] += mobility * v.real
+                jac[m_count + i, base + c] += mobility * v.imag
+            # d dpose_c = Re(N conj(G_hat(k_j)) (i k_j)^al delta g_j)
+            scale = bot_mobility[c] * weight * n
+            for j in range(m_count):
+                t = g_hat[j].conjugate() * orders[al, j]
+                jac[base + c, j] -= scale * t.real
+                jac[base + c, m_count + j] += scale * t.imag
+    for c in range(3):
+        for d in range(3):
+            jac[base + c, base + d] -= bot_mobility[c] * weight * hpp[c, d]
+    hpp[:, :] = 0.0
+    for t in range(n_active):
+        hww[active[t]] = 0.0
+        hwp[active[t]] = 0.0
+
+
+def make_fd_hessian(partials):
+    """The documented fallback for energy terms without analytic second derivatives: central
+    differences of the (composed) partials kernel.
+
+    A term's partials at point n depend only on the point's own w_n and on the pose, so one
+    perturbation of component b at *all* points gives column b of every point's Hessian:
+    2 x (6 + 3) kernel calls in all. Steps: ``steps[0:6]`` for w (cm), ``steps[6:9]`` for the
+    pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
+    """
+
+    @njit(nogil=True)
+    def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus,
+                   pose_tmp, hww, hwp, hpp):
+        n = w.shape[1]
+        for b in range(6):
+            h = steps[b]
+            saved[:] = w[b]
+            for i in range(n):
+                w[b, i] = saved[i] + h
+            plus[:, :] = 0.0
+            dplus[:] = 0.0
+            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
+                     plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
+            for i in range(n):
+                w[b, i] = saved[i] - h
+            minus[:, :] = 0.0
+            dminus[:] = 0.0
+            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
+                     minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
+            w[b] = saved
+            inv = 0.5 / h
+            for a in range(6):
+                for i in range(n):
+                    hww[i, a, b] += (plus[a, i] - minus[a, i]) * inv
+        for c in range(3):
+            h = steps[6 + c]
+            pose_tmp[:] = pose
+            pose_tmp[c] = pose[c] + h
+            plus[:, :] = 0.0
+            dplus[:] = 0.0
+            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
+                     plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
+            pose_tmp[c] = pose[c] - h
+            minus[:, :] = 0.0
+            dminus[:] = 0.0
+            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
+                     minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
+            inv = 0.5 / h
+            for a in range(6):
+                for i in range(n):
+                    hwp[i, a, c] += (plus[a, i] - minus[a, i]) * inv
+            for d in range(3):
+                hpp[d, c] += (dplus[d] - dminus[d]) * inv
+
+    return fd_hessian
+
+
+HESSIAN_ARGS = ("w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
+                "pose_tmp, hww, hwp, hpp")
+
+
+def compose_hessians(terms) -> object:
+    """One compiled function that adds every term's second derivatives into ``hww, hwp, hpp``
+    (which :func:`assemble_jacobian` leaves at zero after use): its ``hessian_kernel`` where
+    it has one, the central-difference fallback of :func:`make_fd_hessian` otherwise.
+    ``coefficients`` is the tuple of the terms' arrays; ``w`` is float64[6, N]
+    (x, y, x', y', x'', y''); the other arguments are those of the fallback.
+    """
+    namespace: dict[str, object] = {}
+    lines = [f"def total_hessian({HESSIAN_ARGS}):"]
+    for i, term in enumerate(terms):
+        kernel = term.hessian_kernel()
+        if kernel is not None:
+            namespace[f"h{i}"] = kernel
+            lines.append(f"    h{i}(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, "
+                         f"coefficients[{i}], hww, hwp, hpp)")
+        else:
+            namespace[f"h{i}"] = make_fd_hessian(term.partials_kernel())
+            args = HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
+            lines.append(f"    h{i}({args})")
+    if len(lines) == 1:
+        lines.append("    pass")
+    exec(compile("\n".join(lines) + "\n", "<softcell composed hessians>", "exec"), namespace)
+    return njit(nogil=True)(namespace["total_hessian"])
+
+
+def make_fd_drive_jacobian(drive):
+    """d drive / d pose by central differences of the drive kernel (steps in cm, cm, rad)."""
+
+    @njit(nogil=True)
+    def drive_jacobian(phase, datum, pose, context, drive_coefficients, steps, pose_tmp,
+                       plus, minus, out):
+        for d in range(3):
+            h = steps[6 + d]
+            pose_tmp[:] = pose
+            pose_tmp[d] = pose[d] + h
+            drive(phase, datum, pose_tmp, context, drive_coefficients, plus)
+            pose_tmp[d] = pose[d] - h
+            drive(phase, datum, pose_tmp, context, drive_coefficients, minus)
+            for c in range(3):
+                out[c, d] = (plus[c] - minus[c]) * (0.5 / h)
+
+    return drive_jacobian
