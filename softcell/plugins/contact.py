@@ -24,27 +24,35 @@ from softcell.core.params import MODEL_PARAMETERS
 
 
 @njit(**JIT)
+def _near(dx, dy, c, s, a, b, cutoff):
+    """Signed distance (cm) and local outward normal of the point d = gamma - r_bot, and its
+    coordinates in the bot's frame, if it lies within ``cutoff`` of the ellipse: returns
+    ``(True, rho, nx, ny, px, py)``, else ``(False, ...)``. Two cheap tests come first: the
+    circle of radius a + cutoff, then the ellipse scaled by 1 + cutoff / b (outside it the
+    distance is at least cutoff)."""
+    if dx * dx + dy * dy > (a + cutoff) ** 2:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+    px = c * dx + s * dy
+    py = -s * dx + c * dy
+    if (px / a) ** 2 + (py / b) ** 2 > (1.0 + cutoff / b) ** 2:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+    rho, nx, ny = signed_distance_local(px, py, a, b)
+    return rho <= cutoff, rho, nx, ny, px, py
+
+
+@njit(**JIT)
 def contact_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
                      p0x, p0y, p1x, p1y, p2x, p2y, dpose):
     amplitude, length = coefficients[0], coefficients[1]
     l0, a, b = context[0], context[1], context[2]
     cutoff = CONTACT_CUTOFF_LENGTHS * length
-    reach2 = (a + cutoff) ** 2
-    # Outside the ellipse scaled by g, the distance is at least (g - 1) b.
-    scaled2 = (1.0 + cutoff / b) ** 2
     scale = l0 / (2.0 * math.pi) * amplitude / length
     bx, by, theta = pose[0], pose[1], pose[2]
     c, s = math.cos(theta), math.sin(theta)
     for n in range(x.size):
         dx, dy = x[n] - bx, y[n] - by
-        if dx * dx + dy * dy > reach2:
-            continue
-        px = c * dx + s * dy
-        py = -s * dx + c * dy
-        if (px / a) ** 2 + (py / b) ** 2 > scaled2:
-            continue
-        rho, nx, ny = signed_distance_local(px, py, a, b)
-        if rho > cutoff:
+        near, rho, nx, ny, _, _ = _near(dx, dy, c, s, a, b, cutoff)
+        if not near:
             continue
         gx, gy = c * nx - s * ny, s * nx + c * ny
         w = scale * math.exp(-rho / length)
@@ -67,22 +75,14 @@ def contact_hessian(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hw
     amplitude, length = coefficients[0], coefficients[1]
     l0, a, b = context[0], context[1], context[2]
     cutoff = CONTACT_CUTOFF_LENGTHS * length
-    reach2 = (a + cutoff) ** 2
-    scaled2 = (1.0 + cutoff / b) ** 2
     scale = l0 / (2.0 * math.pi) * amplitude / length
     a2b2 = a * a * b * b
     bx, by, theta = pose[0], pose[1], pose[2]
     c, s = math.cos(theta), math.sin(theta)
     for n in range(x.size):
         dx, dy = x[n] - bx, y[n] - by
-        if dx * dx + dy * dy > reach2:
-            continue
-        px = c * dx + s * dy
-        py = -s * dx + c * dy
-        if (px / a) ** 2 + (py / b) ** 2 > scaled2:
-            continue
-        rho, nx, ny = signed_distance_local(px, py, a, b)
-        if rho > cutoff:
+        near, rho, nx, ny, px, py = _near(dx, dy, c, s, a, b, cutoff)
+        if not near:
             continue
         qx, qy = px - rho * nx, py - rho * ny
         kappa = 1.0 / (a2b2 * ((qx / (a * a)) ** 2 + (qy / (b * b)) ** 2) ** 1.5)

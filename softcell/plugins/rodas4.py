@@ -31,7 +31,7 @@ from softcell.core.kernels.jacobian import (
     make_fd_drive_jacobian,
 )
 from softcell.core.kernels.linalg import lu_factor, lu_solve
-from softcell.core.kernels.spectral import assemble
+from softcell.core.kernels.spectral import AXES, assemble, derivative_spectrum
 from softcell.core.params import ParameterSpec
 
 # RODAS4 in Hairer & Wanner's transformed variables: gamma, a_ij, c_ij, dense output h_ij.
@@ -112,6 +112,19 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         drag=np.zeros(3))
 
 
+@njit(nogil=True)
+def _accumulate(g, mobility, out, drag):
+    """Add one grid's force modes to the modes' rates in ``out`` and its (2 pi / N)-weighted
+    pose derivatives to ``drag``."""
+    m = g.fhat.size
+    weight = 2.0 * math.pi / g.w.shape[1]
+    for j in range(m):
+        out[j] += mobility * g.fhat[j].real
+        out[m + j] += mobility * g.fhat[j].imag
+    for c in range(3):
+        drag[c] += weight * g.dpose[c]
+
+
 def _make_grid_functions(partials, hessian, scan):
     """Force modes and Jacobian contributions of one group of terms on one grid.
 
@@ -125,19 +138,10 @@ def _make_grid_functions(partials, hessian, scan):
         """g.fhat (N) and g.dpose of the group at these modes; curve derivatives above
         ``order`` are left at zero."""
         n = g.w.shape[1]
-        axes = np.zeros(1, dtype=np.int64)
         lc = (modes.size - 1) // 2
         for o in range(order + 1):
-            g.spec[:] = 0.0
-            for j in range(modes.size):
-                k = j - lc
-                factor = 1.0 + 0.0j
-                if o == 1:
-                    factor = 1j * k
-                elif o == 2:
-                    factor = -(k * k) + 0.0j
-                g.spec[k % n] = factor * modes[j]
-            c2c(g.spec, g.curve[o], axes, False, 1.0, 1)
+            derivative_spectrum(modes, o, g.spec)
+            c2c(g.spec, g.curve[o], AXES, False, 1.0, 1)
             for i in range(n):
                 g.w[2 * o, i] = g.curve[o, i].real
                 g.w[2 * o + 1, i] = g.curve[o, i].imag
@@ -222,23 +226,11 @@ def _make_loop(smooth_group, fine_group, drive):
                 out[j] = 0.0
                 out[m + j] = 0.0
             if has_s:
-                g = ws.smooth
-                forces_s(ws.modes, pose, order_s, context, coefficients[0], g)
-                weight = 2.0 * math.pi / g.w.shape[1]
-                for j in range(m):
-                    out[j] += mobility * g.fhat[j].real
-                    out[m + j] += mobility * g.fhat[j].imag
-                for c in range(3):
-                    drag[c] += weight * g.dpose[c]
+                forces_s(ws.modes, pose, order_s, context, coefficients[0], ws.smooth)
+                _accumulate(ws.smooth, mobility, out, drag)
             if has_f:
-                g = ws.fine
-                forces_f(ws.modes, pose, order_f, context, coefficients[1], g)
-                weight = 2.0 * math.pi / g.w.shape[1]
-                for j in range(m):
-                    out[j] += mobility * g.fhat[j].real
-                    out[m + j] += mobility * g.fhat[j].imag
-                for c in range(3):
-                    drag[c] += weight * g.dpose[c]
+                forces_f(ws.modes, pose, order_f, context, coefficients[1], ws.fine)
+                _accumulate(ws.fine, mobility, out, drag)
         else:
             out[:2 * m] = 0.0
         drive(phase, datum, pose, context, drive_coefficients, ws.drv)

@@ -17,7 +17,6 @@ from softcell.core.engine import (
     build_integrator,
     build_model,
     force_modes,
-    phase_at,
 )
 from softcell.core.ensemble import run_realization
 from softcell.core.params import Parameters
@@ -116,4 +115,4 @@ def path_difference(a: Record, b: Record, cutoff: int) -> dict[str, float]:
             "heading": float(np.abs(a.pose[:, 2] - b.pose[:, 2]).max())}
 
 
-__all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference", "phase_at"]
+__all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference"]

@@ -26,11 +26,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 from rocket_fft import c2c
 
 from softcell.core.config import JIT
+from softcell.core.kernels.spectral import AXES
 
 #: Blocks nonzero at no more than this many points are transformed by direct sums, not FFTs.
 SPARSE_POINTS = 48
@@ -50,10 +50,20 @@ def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
                 s += buf[i] * twiddle[(m * i) % n]
             out[m - lo] = s * inv
     else:
-        axes = np.zeros(1, dtype=np.int64)
-        c2c(buf, scratch, axes, True, 1.0 / n, 1)
+        c2c(buf, scratch, AXES, True, 1.0 / n, 1)
         for m in range(lo, hi + 1):
             out[m - lo] = scratch[m % n]
+
+
+@njit(**JIT)
+def _dense_if_many(index, count, n):
+    """Past SPARSE_POINTS points, list every point (the block is then transformed by an FFT,
+    which reads the whole buffer); return the new count."""
+    if count <= SPARSE_POINTS:
+        return count
+    for i in range(n):
+        index[i] = i
+    return n
 
 
 @njit(**JIT)
@@ -137,12 +147,7 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
                     count += 1
             if count == 0:
                 continue
-            if count > SPARSE_POINTS:
-                count = n
-                for i in range(n):
-                    index[i] = i
-                buf_a[:] = 0.0
-                buf_b[:] = 0.0
+            count = _dense_if_many(index, count, n)
             for t in range(count):
                 i = index[t]
                 hxx = hww[i, 2 * al, 2 * be]
@@ -187,10 +192,7 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
                     count += 1
             if count == 0:
                 continue
-            if count > SPARSE_POINTS:
-                count = n
-                for i in range(n):
-                    index[i] = i
+            count = _dense_if_many(index, count, n)
             for t in range(count):
                 i = index[t]
                 buf_a[i] = complex(hwp[i, 2 * al, c], hwp[i, 2 * al + 1, c])

@@ -13,6 +13,7 @@ from rocket_fft import c2c
 
 from softcell.core.config import JIT
 
+#: The FFT axis of every 1-D transform (a module constant: no allocation per call).
 AXES = np.zeros(1, dtype=np.int64)
 
 
@@ -23,27 +24,33 @@ def wavenumber(j: int, n: int) -> int:
 
 
 @njit(**JIT)
+def derivative_spectrum(modes, order, spec):
+    """Fill ``spec`` (complex128[N]) with the N-point spectrum of the ``order``-th xi-derivative
+    of the curve (0, 1 or 2): (i k)^order g_k in FFT bin k mod N, zero elsewhere."""
+    n = spec.size
+    lc = (modes.size - 1) // 2
+    spec[:] = 0.0
+    for j in range(modes.size):
+        k = j - lc
+        factor = 1.0 + 0.0j
+        if order == 1:
+            factor = 1j * k
+        elif order == 2:
+            factor = -(k * k) + 0.0j
+        spec[k % n] = factor * modes[j]
+
+
+@njit(**JIT)
 def evaluate(modes, spec, z, zp, zpp):
     """Curve and its first two xi-derivatives at the N = len(z) collocation points.
 
     ``modes``: complex128[2 Lc + 1] (cm); ``spec``: complex128[N] scratch;
     ``z, zp, zpp``: complex128[N] outputs (cm).
     """
-    n = z.size
-    lc = (modes.size - 1) // 2
-    axes = np.zeros(1, dtype=np.int64)
     for order in range(3):
-        spec[:] = 0.0
-        for j in range(modes.size):
-            k = j - lc
-            factor = 1.0 + 0.0j
-            if order == 1:
-                factor = 1j * k
-            elif order == 2:
-                factor = -(k * k) + 0.0j
-            spec[k % n] = factor * modes[j]
+        derivative_spectrum(modes, order, spec)
         out = z if order == 0 else (zp if order == 1 else zpp)
-        c2c(spec, out, axes, False, 1.0, 1)
+        c2c(spec, out, AXES, False, 1.0, 1)
 
 
 @njit(**JIT)
@@ -56,7 +63,7 @@ def assemble(q0, q1, q2, has_q0, spec, fhat):
     """
     n = q0.size
     lc = (fhat.size - 1) // 2
-    axes = np.zeros(1, dtype=np.int64)
+    axes = AXES
     inv = 1.0 / n
     fhat[:] = 0.0
     if has_q0:
