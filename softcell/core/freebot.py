@@ -71,9 +71,17 @@ def turn_correlation(params: Parameters) -> float:
     """<cos(omega tau)> over a tumble, tau ~ U[phase_min, phase_max] (SPEC: -0.1824)."""
     _, omega, _ = _kinematics(params)
     lo, hi = float(params.phase_min), float(params.phase_max)
-    if hi == lo:
-        return float(np.cos(omega * lo))
-    return float((np.sin(omega * hi) - np.sin(omega * lo)) / (omega * (hi - lo)))
+    return float(_uniform_exp(1j * omega, lo, hi).real)
+
+
+def _uniform_exp(k: complex, lo: float, hi: float) -> complex:
+    """<exp(k tau)> for tau ~ U[lo, hi]: exp(k m) sinh(k h) / (k h) with m, h the midpoint and
+    half-width, a form without the cancellation of (e^{k hi} - e^{k lo}) / (k (hi - lo)) when
+    hi is close to lo (a series below |k h| = 1e-4)."""
+    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    z = k * half
+    ratio = np.sinh(z) / z if abs(z) > 1e-4 else 1 + z * z / 6 + z**4 / 120
+    return complex(np.exp(k * mid) * ratio)
 
 
 def renewal_diffusion(params: Parameters, pivot: str | None = None) -> float:
@@ -85,10 +93,10 @@ def renewal_diffusion(params: Parameters, pivot: str | None = None) -> float:
     v, omega, d = _kinematics(params)
     lo, hi = float(params.phase_min), float(params.phase_max)
     mean_tau = 0.5 * (lo + hi)
-    mean_tau2 = (hi**3 - lo**3) / (3 * (hi - lo)) if hi > lo else lo**2
+    mean_tau2 = (hi * hi + hi * lo + lo * lo) / 3
 
     def e_exp(k: complex) -> complex:  # <exp(k tau)>, tau ~ U[lo, hi]
-        return (np.exp(k * hi) - np.exp(k * lo)) / (k * (hi - lo)) if hi > lo else np.exp(k * lo)
+        return _uniform_exp(k, lo, hi)
 
     # Average over the sign s = +-1 of functions of phi = s omega tau.
     c = 0.5 * (e_exp(1j * omega) + e_exp(-1j * omega))

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
@@ -80,6 +80,8 @@ def test_free_bot_diffusion_matches_spec(pivot, expected):
 @settings(max_examples=10)
 @given(st.floats(0.05, 1.0), st.floats(1.0, 4.0), st.floats(20, 400), st.floats(0, 2),
        st.sampled_from([None, "fixed", "inner"]))
+# Nearly fixed phase lengths once broke the formula by cancellation in (hi^3 - lo^3)/(hi - lo).
+@example(lo=1.0, spread=1.0000000000000002, torque=33.0, offset=0.0, pivot=None)
 def test_renewal_formula_against_exact_kinematics(lo, spread, torque, offset, pivot):
     params = Parameters({"phase_min": lo, "phase_max": lo * spread, "drive_torque": torque,
                          "pivot_offset": offset})
