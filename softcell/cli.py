@@ -114,13 +114,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     realizations = args.realizations or run.get("realizations", 1)
     seed = args.seed if args.seed is not None else run.get("seed", 0)
     for name, value in (("realizations", realizations), ("workers", args.workers)):
-        if value < 1:
+        if value is not None and value < 1:
             raise SoftcellError(f"--{name} = {value} is not allowed: must be >= 1")
     if not args.checkpoint_every > 0:
         raise SoftcellError(f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
                             "must be > 0 s")
     paths = simulate(config, args.output, realizations=realizations, seed=seed,
-                     workers=args.workers, membrane=not args.free_bot,
+                     workers=args.workers or 1, scheduler=args.scheduler,
+                     membrane=not args.free_bot,
                      progress=not args.quiet, checkpoint_every=args.checkpoint_every)
     print(f"{len(paths)} files in {args.output}")
     return 0
@@ -189,6 +190,41 @@ def _cmd_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_figures(args: argparse.Namespace) -> int:
+    from softcell.io.figures import make_figures
+    from softcell.io.netcdf import open_dataset, read_dataset
+
+    made = make_figures(
+        read_dataset(args.analysis), args.output,
+        simulations=open_dataset(args.simulations) if args.simulations else None,
+        free_bot=read_dataset(args.free_bot) if args.free_bot else None,
+        tracked=read_dataset(args.tracked) if args.tracked else None)
+    for name, files in made.files.items():
+        print(f"{name}: {', '.join(str(f) for f in files)}")
+    for name, why in made.skipped.items():
+        print(f"note: {name} not drawn: {why}")
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from softcell.io.reproduce import DESIGNS, reproduce
+
+    outcome = reproduce(args.output, DESIGNS["full" if args.full else "quick"], seed=args.seed,
+                        workers=args.workers, scheduler=args.scheduler,
+                        progress=not args.quiet)
+    print(f"done in {sum(outcome.steps.values()):.0f} s: {outcome.report}")
+    return 0
+
+
+def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--workers", type=int, help=workers_help)
+    group.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run the realizations on the dask.distributed cluster whose "
+                            "scheduler listens at ADDRESS (e.g. tcp://10.0.0.5:8786), one task "
+                            "per realization; its workers must see the output directory")
+
+
 def _describe(ds: Any) -> str:
     swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
     points = " x ".join(f"{ds.sizes[d]} {d}" for d in swept)
@@ -217,7 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="directory for the files, one per (parameter point, realization)")
     p.add_argument("--realizations", type=int, help="realizations per parameter point")
     p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes")
+    _add_cluster_flags(p, "local worker processes (default 1; more: a local dask cluster)")
     p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
     p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
                    "paper's scheme, the reference)")
@@ -275,6 +311,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--radius", type=float, help="membrane radius R [cm] (default: estimated)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
+
+    p = sub.add_parser("figures", help="the paper's figures (PNG and PDF) from an analysis of "
+                       "a radius sweep")
+    p.add_argument("analysis", type=Path, help="analysis file of a radius sweep (.nc)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="directory for the figures")
+    p.add_argument("--simulations", type=Path,
+                   help="the sweep's simulation directory (trajectories of Fig. 2)")
+    p.add_argument("--free-bot", type=Path, help="analysis of free-bot runs (Fig. S1)")
+    p.add_argument("--tracked", type=Path,
+                   help="analysis of a tracked video (the experiments' markers)")
+    p.set_defaults(func=_cmd_figures)
+
+    p = sub.add_parser("reproduce", help="the paper end to end: simulate, analyze, render and "
+                       "track, figures, report")
+    design = p.add_mutually_exclusive_group()
+    design.add_argument("--quick", action="store_true",
+                        help="every radius, 5 realizations of 240 s (the default; minutes)")
+    design.add_argument("--full", action="store_true",
+                        help="the paper's design: 25 realizations of 900/1800 s per radius")
+    p.add_argument("-o", "--output", type=Path, required=True, help="results directory")
+    p.add_argument("--seed", type=int, default=0, help="root seed of every random stream")
+    _add_cluster_flags(p, "local worker processes (default: every core)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_reproduce)
     return parser
 
 

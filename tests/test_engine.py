@@ -42,10 +42,21 @@ def test_sampling_grid():
 
 
 def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
-    config = RunConfig(parameters=SHORT)
+    """In this process, on a local dask cluster, and through a scheduler's address (the
+    explicit scheme: each worker process compiles its stepper, and this one compiles fast)."""
+    config = RunConfig(parameters=SHORT).updated(components={"integrator": "explicit_euler"})
     one = simulate(config, tmp_path / "one", realizations=2, seed=5, progress=False)
     two = simulate(config, tmp_path / "two", realizations=2, seed=5, workers=2, progress=False)
     assert [p.read_bytes() for p in one] == [p.read_bytes() for p in two]
+    from distributed import LocalCluster
+
+    # A scheduler reached over loopback, as a remote one would be.
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
+        three = simulate(config, tmp_path / "three", realizations=2, seed=5, progress=False,
+                         scheduler=cluster.scheduler_address)
+    assert [p.read_bytes() for p in one] == [p.read_bytes() for p in three]
     other = simulate(config, tmp_path / "other", realizations=2, seed=6, progress=False)
     assert one[0].read_bytes() != other[0].read_bytes()
     ds = softcell.open_dataset(tmp_path / "one")

@@ -5,6 +5,10 @@ Every random stream comes from one root seed: realization r of parameter point p
 their order. Each (point, realization) is written atomically to its own file; finished files
 are skipped when the same command runs again, and a long realization checkpoints its state
 (``.<name>.ckpt.npz``) so that a killed run resumes to the same bytes.
+
+Beyond one process the realizations run on a dask.distributed cluster, one task each: a local
+cluster of ``workers`` processes, or the cluster whose scheduler listens at ``scheduler``
+(whose workers must see the output directory, e.g. on a shared file system).
 """
 
 from __future__ import annotations
@@ -14,9 +18,7 @@ import json
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from multiprocessing import Manager
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +37,7 @@ from softcell.core.engine import (
     phase_at,
     sample_times,
 )
+from softcell.core.errors import SoftcellError
 from softcell.core.params import Parameters, expand_sweep
 from softcell.core.runconfig import RunConfig
 
@@ -204,60 +207,110 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
 
 
 def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: int = 1,
-             seed: int = 0, workers: int = 1, membrane: bool = True, progress: bool = True,
+             seed: int = 0, workers: int = 1, scheduler: str | None = None,
+             client: Any = None, membrane: bool = True, progress: bool = True,
              checkpoint_every: float = CHECKPOINT_EVERY) -> list[Path]:
     """Run an ensemble: every parameter point of ``config`` x ``realizations``.
 
     Files already present in ``out`` are kept (finished realizations are skipped).
 
+    Parameters
+    ----------
+    workers : int
+        1: run in this process; more: a local dask.distributed cluster of that many
+        single-threaded worker processes.
+    scheduler : str, optional
+        Address of a running dask.distributed scheduler (``tcp://host:8786``): one task per
+        realization on its workers, which must be able to write to ``out``. Excludes
+        ``workers``.
+
     Returns
     -------
     list of Path
-        One NetCDF file per (point, realization), in task order.
+        One NetCDF file per (point, realization), in task order. The bytes do not depend on
+        ``workers`` or ``scheduler``.
     """
     from tqdm.auto import tqdm
 
+    if workers < 1:
+        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
+    if sum([scheduler is not None, workers != 1, client is not None]) > 1:
+        raise SoftcellError(f"workers = {workers}, scheduler = {scheduler!r} and a client "
+                            "exclude each other: give one")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tasks = plan(config, out, realizations=realizations, seed=seed, membrane=membrane)
     todo = [t for t in tasks if not Path(t.path).exists()]
-    total = sum(float(Parameters(t.values, _extra()).duration) for t in todo)
+    total = sum(_duration(t) for t in todo)
     with tqdm(total=total, unit="sim s", disable=not progress or not todo, unit_scale=False,
               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} sim s "
                          "[{elapsed}<{remaining}]",
               desc=f"{len(todo)} realizations") as bar:
-        if workers <= 1:
+        if client is not None:
+            run_on_cluster(todo, client, bar.update, checkpoint_every)
+        elif scheduler is None and workers == 1:
             for task in todo:
                 run_task(task, bar.update, checkpoint_every)
-        else:
-            _run_parallel(todo, workers, bar, checkpoint_every)
+        elif todo:
+            with cluster_client(workers, scheduler) as own:
+                run_on_cluster(todo, own, bar.update, checkpoint_every)
     return [Path(t.path) for t in tasks]
 
 
-def _extra():
+def _duration(task: Task) -> float:
     from softcell.core.registry import get_registry
 
-    return list(get_registry().parameter_specs().values())
+    return float(Parameters(task.values, get_registry().parameter_specs().values()).duration)
 
 
-def _run_with_queue(task: Task, queue, checkpoint_every: float) -> str:
-    return run_task(task, queue.put, checkpoint_every)
+def cluster_client(workers: int, scheduler: str | None = None):
+    """A dask.distributed Client: of the scheduler at ``scheduler``, or of a new local cluster
+    of ``workers`` single-threaded processes (closed with the client). Use it as a context
+    manager."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout="30s")
+        except OSError as exc:
+            raise SoftcellError(f"cannot reach the dask scheduler at {scheduler!r}: {exc}"
+                                ) from None
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    client = Client(cluster)
+    client.close = _closing_cluster(client.close, cluster)
+    return client
 
 
-def _run_parallel(tasks: list[Task], workers: int, bar, checkpoint_every: float) -> None:
-    with Manager() as manager, ProcessPoolExecutor(workers) as pool:
-        queue = manager.Queue()
-        futures = [pool.submit(_run_with_queue, t, queue, checkpoint_every) for t in tasks]
-        pending = set(futures)
-        while pending:
-            while not queue.empty():
-                bar.update(queue.get())
-            done = {f for f in pending if f.done()}
-            for f in done:
-                f.result()  # re-raise a worker's error
-            pending -= done
-            time.sleep(0.05)
-        for f in as_completed(futures):
-            f.result()
-        while not queue.empty():
-            bar.update(queue.get())
+def _closing_cluster(close, cluster):
+    def close_both(*args, **kwargs):
+        try:
+            return close(*args, **kwargs)
+        finally:
+            cluster.close()
+    return close_both
+
+
+def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] | None = None,
+                   checkpoint_every: float = CHECKPOINT_EVERY) -> list[str]:
+    """Run ``tasks`` on a dask.distributed ``client``, one task per realization; each writes
+    its own file atomically. ``progress`` is called with a task's simulated seconds when it
+    ends. The first failure cancels what has not started and is raised (finished files stay).
+    """
+    from distributed import as_completed
+
+    futures = {client.submit(run_task, task, None, checkpoint_every, pure=False): task
+               for task in tasks}
+    paths = []
+    try:
+        for future in as_completed(futures):
+            paths.append(future.result())
+            if progress:
+                progress(_duration(futures[future]))
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+    return paths

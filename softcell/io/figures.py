@@ -1,0 +1,403 @@
+"""The paper's figures, panel for panel, from analysis Datasets (PNG and PDF, cm and s).
+
+:func:`make_figures` draws Fig. 2 (trajectories, speeds, MSD, scaling collapse), Fig. 3 (stop
+and go: a shaded speed series, PDFs, mean durations against R), Fig. 4 (theory against fits),
+S1 (free bot against bot in the membrane), S2 (simulated PDFs) and S3 (bot and cell MSD at
+R = 12 cm). The inputs are the analysis of a radius sweep and, for the panels that need them,
+the sweep's simulation Dataset (trajectories), the free bot's analysis (S1) and the analysis
+of a tracked video (the experiments' markers). A figure whose input is missing is not drawn,
+and :class:`FigureSet` says which and why.
+
+Backgrounds follow the paper: purple for the coupled regime, pink for the intermediate one,
+green for the decoupled one (from the analysis's ``regime``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from softcell.core.errors import SoftcellError
+
+#: Background colour of each regime (``regime`` flag value), as in the paper.
+REGIME_COLORS = {0: "#b39ddb", 1: "#f8bbd0", 2: "#a5d6a7"}
+REGIME_NAMES = {-1: "unknown", 0: "coupled", 1: "intermediate", 2: "decoupled"}
+SIM_COLOR, EXP_COLOR = "#00acc1", "#fb8c00"  # cyan circles, orange triangles (Fig. 3c)
+FORMATS = ("png", "pdf")
+
+
+@dataclass
+class FigureSet:
+    """What :func:`make_figures` wrote: files per figure name, and figures left out (why)."""
+
+    files: dict[str, list[Path]] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
+
+
+def _figure(width: float, height: float):
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _radius_index(analysis: xr.Dataset, radius: float) -> int | None:
+    if "radius" not in analysis.dims:
+        return None
+    radii = analysis["radius"].values
+    i = int(np.argmin(np.abs(radii - radius)))
+    return i if abs(radii[i] - radius) < 1e-9 else None
+
+
+def _regime_at(analysis: xr.Dataset, i: int) -> int:
+    return int(analysis["regime"].values[i])
+
+
+def _shade_regimes(ax, analysis: xr.Dataset) -> None:
+    """Shade each radius's slot of an R axis with its regime's colour."""
+    radii = analysis["radius"].values
+    edges = np.concatenate([[radii[0] - 0.5], 0.5 * (radii[1:] + radii[:-1]),
+                            [radii[-1] + 0.5]])
+    for k, regime in enumerate(analysis["regime"].values):
+        if int(regime) in REGIME_COLORS:
+            ax.axvspan(edges[k], edges[k + 1], color=REGIME_COLORS[int(regime)], alpha=0.35,
+                       lw=0)
+    ax.set_xlim(edges[0], edges[-1])
+
+
+def _background(ax, regime: int) -> None:
+    if regime in REGIME_COLORS:
+        ax.set_facecolor(REGIME_COLORS[regime] + "55")
+
+
+def _radius_colors(radii: np.ndarray):
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    span = max(float(radii.max() - radii.min()), 1e-12)
+    return [cmap(0.9 * (r - radii.min()) / span) for r in radii]
+
+
+def _label(ax, letter: str) -> None:
+    ax.set_title(f"({letter})", loc="left", fontsize=10, fontweight="bold")
+
+
+def _msd_axes(ax) -> None:
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(r"$\tau$ (s)")
+    ax.set_ylabel(r"$\Delta$ (cm$^2$)")
+
+
+def _trajectory(ax, simulations: xr.Dataset, radius: float, span: float, analysis) -> None:
+    sel = simulations.sel(radius=radius).isel(realization=0)
+    t = np.asarray(sel["time"].values)
+    t0 = t[0] + float(json_option(analysis, "discard"))
+    use = (t >= t0) & (t <= t0 + span) & np.isfinite(np.asarray(sel["cell_x"].values))
+    for body, color in (("bot", "0.35"), ("cell", "C3")):
+        ax.plot(np.asarray(sel[f"{body}_x"].values)[use], np.asarray(sel[f"{body}_y"].values)[use],
+                color=color, lw=0.8, label=f"{body} GC" if body == "cell" else "bot")
+    first = int(np.argmax(use))
+    ax.plot(np.append(sel["membrane_x"].values[first], sel["membrane_x"].values[first][0]),
+            np.append(sel["membrane_y"].values[first], sel["membrane_y"].values[first][0]),
+            color="C3", lw=0.6, ls=":", label=f"membrane at t = {t[first]:.0f} s")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (cm)")
+    ax.set_ylabel("y (cm)")
+    ax.legend(fontsize=7, loc="best")
+    ax.text(0.02, 0.02, f"R = {radius:g} cm, {span:g} s", transform=ax.transAxes, fontsize=8)
+
+
+def json_option(analysis: xr.Dataset, name: str):
+    """An analysis option stored in the analysis file (``softcell_analysis_options``)."""
+    import json
+
+    return json.loads(analysis.attrs["softcell_analysis_options"])[name]
+
+
+def _speed_series(ax, analysis: xr.Dataset, i: int, span: float, bodies=("bot", "cell"),
+                  shade: bool = False) -> None:
+    point = analysis.isel(radius=i, realization=0)
+    t = np.asarray(analysis["time"].values)
+    dt = np.diff(t)
+    fine = np.flatnonzero(np.isclose(dt, dt.min()))
+    use = np.zeros(t.size, dtype=bool)
+    use[fine[0]: fine[0] + int(round(span / dt.min())) + 1] = True
+    for body, color in zip(bodies, ("0.35", "C3"), strict=False):
+        s = np.asarray(point["speed"].sel(body=body).values)
+        ax.plot(t[use], s[use], color=color, lw=0.7, label=f"{body}")
+    if shade:
+        lab = np.asarray(point["stopgo_label"].sel(body=bodies[-1]).values)[use]
+        tt = t[use]
+        stop = lab == 0
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], stop.astype(int), [0]])))
+        for a, b in zip(edges[::2], edges[1::2], strict=True):
+            ax.axvspan(tt[a], tt[min(b, tt.size - 1)], color="0.8", lw=0)
+        mean = float(np.nanmean(np.asarray(point["speed"].sel(body=bodies[-1]).values)))
+        ax.axhline(mean, color="red", ls="--", lw=1, label="time average")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("|v| (cm/s)")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.text(0.02, 0.9, f"R = {float(analysis['radius'][i]):g} cm", transform=ax.transAxes,
+            fontsize=8)
+
+
+def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
+    radii = analysis["radius"].values
+    lag = analysis["lag"].values
+    for r, color in zip(radii, _radius_colors(radii), strict=True):
+        ax.plot(lag, analysis["msd"].sel(radius=r, body=body).values, color=color, lw=1,
+                label=f"R = {r:g} cm")
+    _msd_axes(ax)
+    ax.legend(fontsize=6, ncol=2)
+
+
+def _collapse(ax, analysis: xr.Dataset) -> str:
+    metric = analysis["collapse_metric"].values
+    if not np.isfinite(metric).any():
+        ax.text(0.5, 0.5, "fewer than two decoupled radii:\nno collapse", ha="center",
+                transform=ax.transAxes)
+        return "none"
+    k = int(np.nanargmin(metric))
+    a = float(analysis["collapse_msd_exponent"][k])
+    b = float(analysis["collapse_lag_exponent"][k])
+    radii = np.atleast_1d(analysis["collapse_metric"].attrs["radii"])
+    lag = analysis["lag"].values
+    for r, color in zip(radii, _radius_colors(radii), strict=True):
+        end = float(analysis["diffusive_window_start"].sel(radius=r, body="cell"))
+        use = lag <= end
+        ax.plot(lag[use] * r**b, analysis["msd"].sel(radius=r, body="cell").values[use] * r**a,
+                color=color, lw=1, label=f"R = {r:g} cm")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(rf"$\tau\,R^{{{b:+g}}}$ (s cm$^{{{b:+g}}}$)")
+    ax.set_ylabel(rf"$\Delta\,R^{{{a:+.2g}}}$ (cm$^{{{2 + a:.3g}}}$)")
+    ax.legend(fontsize=6, ncol=2)
+    ax.text(0.02, 0.92, f"spread {metric[k]:.3f} decades", transform=ax.transAxes, fontsize=8)
+    return str(analysis["collapse_variant"].values[k])
+
+
+def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
+    """Fig. 2: trajectories at R = 4 and 12 cm, their speed series, MSDs, collapse."""
+    fig = _figure(13, 8)
+    axes = fig.subplots(2, 3)
+    for col, radius in enumerate((4.0, 12.0)):
+        i = _radius_index(analysis, radius)
+        ax_t, ax_v = axes[0, col], axes[1, col]
+        _label(ax_t, "ab"[col])
+        _label(ax_v, "cd"[col])
+        if i is None:
+            for ax in (ax_t, ax_v):
+                ax.text(0.5, 0.5, f"R = {radius:g} cm not simulated", ha="center",
+                        transform=ax.transAxes)
+            continue
+        _background(ax_t, _regime_at(analysis, i))
+        _background(ax_v, _regime_at(analysis, i))
+        _trajectory(ax_t, simulations, radius, 60.0, analysis)
+        _speed_series(ax_v, analysis, i, 10.0)
+    _label(axes[0, 2], "e")
+    _msd_all(axes[0, 2], analysis)
+    _label(axes[1, 2], "f")
+    _collapse(axes[1, 2], analysis)
+    return fig
+
+
+def _pdf_panel(ax, analysis: xr.Dataset, kind: str, radii: Sequence[float],
+               tracked: xr.Dataset | None = None) -> None:
+    x = analysis["scaled_duration"].values
+    colors = _radius_colors(np.asarray(radii))
+    for r, color in zip(radii, colors, strict=True):
+        y = analysis[f"{kind}_pdf"].sel(radius=r, body="cell").values
+        ax.plot(x, np.where(y > 0, y, np.nan), "o", ms=3, color=color, label=f"R = {r:g} cm")
+    if tracked is not None:
+        y = tracked[f"{kind}_pdf"].sel(body="cell").values
+        ax.plot(tracked["scaled_duration"].values, np.where(y > 0, y, np.nan), "^", ms=4,
+                color=EXP_COLOR, label="tracked video")
+    grid = np.linspace(0, max(6.0, float(x.max())), 200)
+    ax.plot(grid, np.exp(-grid), "k--", lw=1, label=r"$e^{-t'}$")
+    ax.set_yscale("log")
+    ax.set_xlim(0, 6)
+    ax.set_ylim(1e-3, 3)
+    symbol = r"\tau_\mathrm{g}" if kind == "go" else r"\tau_\mathrm{s}"
+    ax.set_xlabel(rf"${symbol}/\langle {symbol}\rangle$")
+    ax.set_ylabel(rf"$\mathcal{{P}}({symbol}/\langle {symbol}\rangle)$")
+    ax.legend(fontsize=6, ncol=2)
+
+
+def _tracked_radius(tracked: xr.Dataset) -> float:
+    import json
+
+    return float(json.loads(tracked.attrs.get("softcell_parameters", "{}")).get("radius",
+                                                                                 np.nan))
+
+
+def _against_radius(ax, analysis: xr.Dataset, name: str, label: str,
+                    tracked: xr.Dataset | None = None, body: str = "cell",
+                    error: str | None = None, marker: str = "o", color: str = SIM_COLOR,
+                    legend: str = "simulations") -> None:
+    radii = analysis["radius"].values
+    y = analysis[name].sel(body=body).values
+    yerr = analysis[error].sel(body=body).values if error else None
+    ax.errorbar(radii, y, yerr=yerr, fmt=marker, color=color, mfc="none", ms=6, capsize=2,
+                label=legend)
+    if tracked is not None:
+        ax.plot([_tracked_radius(tracked)], [float(tracked[name].sel(body=body))], "^",
+                color=EXP_COLOR, ms=7, label="tracked video")
+    ax.set_xlabel("R (cm)")
+    ax.set_ylabel(label)
+
+
+def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
+    """Fig. 3: the cell speed at R = 12 cm with stops shaded, PDFs of t/<t>, <tau_g> and
+    <tau_s> against R with the regimes shaded."""
+    fig = _figure(13, 7.5)
+    grid = fig.add_gridspec(2, 3)
+    ax_a = fig.add_subplot(grid[0, :])
+    _label(ax_a, "a")
+    i = _radius_index(analysis, 12.0)
+    i = analysis.sizes["radius"] - 1 if i is None else i
+    _background(ax_a, _regime_at(analysis, i))
+    _speed_series(ax_a, analysis, i, 30.0, bodies=("cell",), shade=True)
+    radii = [r for r in analysis["radius"].values if r >= 6]
+    for col, kind in enumerate(("go", "stop")):
+        ax = fig.add_subplot(grid[1, col])
+        _label(ax, "b")
+        _pdf_panel(ax, analysis, kind, radii, tracked)
+    sub = grid[1, 2].subgridspec(2, 1)
+    for row, (name, symbol) in enumerate((("mean_go_duration", r"\tau_\mathrm{g}"),
+                                          ("mean_stop_duration", r"\tau_\mathrm{s}"))):
+        ax = fig.add_subplot(sub[row])
+        if row == 0:
+            _label(ax, "c")
+        _shade_regimes(ax, analysis)
+        _against_radius(ax, analysis, name, rf"$\langle {symbol}\rangle$ (s)", tracked)
+        ax.legend(fontsize=6)
+    return fig
+
+
+def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
+    """Fig. 4: (a) the fitted ballistic velocity against the theory's v0 hat, (b) the fitted
+    MSD slope against the theory's D hat = 2 v0_hat^2 <tau_g>, for the cell against R."""
+    fig = _figure(9, 4)
+    ax_a, ax_b = fig.subplots(1, 2)
+    for ax, letter, fit, error, theory, label, hat in (
+            (ax_a, "a", "ballistic_velocity", "ballistic_velocity_error", "v0_hat",
+             "velocity (cm/s)", r"$\hat v_0^\mathrm{sim}$"),
+            (ax_b, "b", "msd_slope", "msd_slope_error", "msd_slope_theory",
+             r"$\hat D$ (cm$^2$/s)", r"$\hat D^\mathrm{sim}$")):
+        _label(ax, letter)
+        _shade_regimes(ax, analysis)
+        _against_radius(ax, analysis, fit, label, None, error=error, legend="fit of the MSD")
+        _against_radius(ax, analysis, theory, label, None, marker="s", color="k", legend=hat)
+        if tracked is not None:
+            r = _tracked_radius(tracked)
+            for name, marker in ((fit, "^"), (theory, "v")):
+                ax.plot([r], [float(tracked[name].sel(body="cell"))], marker, color=EXP_COLOR,
+                        ms=7, label=f"tracked video, {'fit' if name == fit else 'theory'}")
+        ax.set_yscale("log")
+        ax.legend(fontsize=6)
+    return fig
+
+
+def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
+    """S1 (b): MSD of the free bot against the bot inside membranes of every R."""
+    fig = _figure(5.5, 4.2)
+    ax = fig.subplots()
+    radii = analysis["radius"].values
+    for r, color in zip(radii, _radius_colors(radii), strict=True):
+        ax.plot(analysis["lag"].values, analysis["msd"].sel(radius=r, body="bot").values,
+                color=color, lw=0.8, label=f"in membrane, R = {r:g} cm")
+    free = free_bot["msd"].sel(body="bot")
+    free = free.isel({d: 0 for d in free.dims if d != "lag"})
+    ax.plot(free_bot["lag"].values, free.values, "k-", lw=2, label="free bot")
+    _msd_axes(ax)
+    ax.legend(fontsize=6, ncol=2)
+    return fig
+
+
+def figure_s2(analysis: xr.Dataset):
+    """S2: simulated PDFs of go (a) and stop (b) durations over their means, every R."""
+    fig = _figure(9, 4)
+    for ax, kind, letter in zip(fig.subplots(1, 2), ("go", "stop"), "ab", strict=True):
+        _label(ax, letter)
+        _pdf_panel(ax, analysis, kind, list(analysis["radius"].values))
+    return fig
+
+
+def figure_s3(analysis: xr.Dataset, radius: float = 12.0):
+    """S3 (b): MSD of the bot and of the cell at R = 12 cm, with their standard errors."""
+    fig = _figure(5.5, 4.2)
+    ax = fig.subplots()
+    i = _radius_index(analysis, radius)
+    i = analysis.sizes["radius"] - 1 if i is None else i
+    _background(ax, _regime_at(analysis, i))
+    lag = analysis["lag"].values
+    for body, color in (("bot", "0.35"), ("cell", "C3")):
+        m = analysis["msd"].isel(radius=i).sel(body=body).values
+        e = analysis["msd_sem"].isel(radius=i).sel(body=body).values
+        ax.plot(lag, m, color=color, label=body)
+        ax.fill_between(lag, m - e, m + e, color=color, alpha=0.25, lw=0)
+    _msd_axes(ax)
+    ax.legend(fontsize=8, title=f"R = {float(analysis['radius'][i]):g} cm", title_fontsize=8)
+    return fig
+
+
+def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
+                 simulations: xr.Dataset | None = None, free_bot: xr.Dataset | None = None,
+                 tracked: xr.Dataset | None = None,
+                 formats: Sequence[str] = FORMATS) -> FigureSet:
+    """Draw every figure the inputs allow into ``out`` (``fig2.png``, ``fig2.pdf``, ...).
+
+    Parameters
+    ----------
+    analysis : xarray.Dataset
+        Analysis of a ``radius`` sweep (:func:`softcell.analyze`), lengths in cm, times in s.
+    simulations : xarray.Dataset, optional
+        The sweep's simulation Dataset, for the trajectories of Fig. 2 (a, b).
+    free_bot : xarray.Dataset, optional
+        Analysis of free-bot runs, for S1.
+    tracked : xarray.Dataset, optional
+        Analysis of a tracked video, drawn as the experiments' markers in Fig. 3 and 4.
+    formats : sequence of str
+        File formats (matplotlib's names).
+
+    Returns
+    -------
+    FigureSet
+        The files written per figure, and the figures left out with the reason.
+    """
+    if "radius" not in analysis.dims:
+        raise SoftcellError("the figures need the analysis of a radius sweep (a 'radius' "
+                            "dimension); this analysis has dims "
+                            f"{', '.join(analysis.dims)}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    result = FigureSet()
+    plans = {
+        "fig2": (lambda: figure2(analysis, simulations), simulations is None,
+                 "needs the simulations (trajectories)"),
+        "fig3": (lambda: figure3(analysis, tracked), False, ""),
+        "fig4": (lambda: figure4(analysis, tracked), False, ""),
+        "figS1": (lambda: figure_s1(analysis, free_bot), free_bot is None,
+                  "needs the free bot's analysis"),
+        "figS2": (lambda: figure_s2(analysis), False, ""),
+        "figS3": (lambda: figure_s3(analysis), False, ""),
+    }
+    for name, (draw, missing, why) in plans.items():
+        if missing:
+            result.skipped[name] = why
+            continue
+        fig = draw()
+        files = []
+        for fmt in formats:
+            path = out / f"{name}.{fmt}"
+            tmp = path.with_name(f".{path.stem}.tmp.{fmt}")
+            fig.savefig(tmp, dpi=150)
+            os.replace(tmp, path)
+            files.append(path)
+        result.files[name] = files
+    return result

@@ -1,0 +1,156 @@
+"""The example plugin distribution (examples/plugin): installed with pip, found through its
+entry point, and each of its four components checked against what it claims."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from softcell.core.engine import build_model, circle_modes, force_modes
+from softcell.core.params import Parameters
+from softcell.core.registry import get_registry
+from softcell.testing import registered
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
+COARSE = ["--cutoff", "4", "--nodes", "64", "--stored-nodes", "16"]
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    """softcell-example installed with pip into a fresh directory (not into this venv)."""
+    target = tmp_path_factory.mktemp("site")
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--target", str(target), str(EXAMPLE)], check=True)
+    return target
+
+
+def softcell_cli(site, *args, cwd):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(site), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    return subprocess.run([sys.executable, "-m", "softcell", *map(str, args)], cwd=cwd,
+                          env=env, capture_output=True, text=True, check=True).stdout
+
+
+@pytest.fixture(scope="module")
+def example(site):
+    """The install directory on sys.path: a registry built inside ``registered()`` then
+    finds the plugin through its entry point, as an installed one is found."""
+    sys.path.insert(0, str(site))
+    try:
+        with registered() as registry:
+            origin = registry.entries("energy_term")
+            assert any(e.component.name == "pressure" and "softcell-example" in e.origin
+                       for e in origin)
+        yield registered
+    finally:
+        sys.path.remove(str(site))
+
+
+def test_installed_distribution_registers_one_component_of_each_kind(site, tmp_path):
+    listing = softcell_cli(site, "plugins", cwd=tmp_path)
+    for name in ("pressure", "run_and_reverse", "explicit_auto", "hysteresis"):
+        block = listing.split(f"    {name}:")[1].split("\n    ")[0:2]
+        assert block[1].strip() == ("origin: distribution softcell-example 1.0.0 "
+                                    "(entry point example = softcell_example.plugin)")
+
+
+def test_installed_components_run_end_to_end_from_the_command_line(site, tmp_path):
+    softcell_cli(site, "simulate", "--energy-terms", "bending,tension,contact,pressure",
+                 "--pressure", "2e-4", "--protocol", "run_and_reverse", "--integrator",
+                 "explicit_auto", "--radius", "5", "--duration", "0.3", *COARSE, "--quiet",
+                 "-o", "run", cwd=tmp_path)
+    softcell_cli(site, "analyze", "run", "-o", "analysis.nc", "--discard", "0.05",
+                 "--detector", "hysteresis", "--quiet", cwd=tmp_path)
+    run = xr.open_dataset(next((tmp_path / "run").glob("*.nc")))
+    components = json.loads(run.attrs["softcell_components"])
+    assert components["energy_terms"] == ["bending", "tension", "contact", "pressure"]
+    assert (components["driving_protocol"], components["integrator"]) == (
+        "run_and_reverse", "explicit_auto")
+    assert json.loads(run.attrs["softcell_parameters"])["pressure"] == 2e-4
+    analysis = xr.open_dataset(tmp_path / "analysis.nc")
+    assert analysis.attrs["softcell_detector"] == "hysteresis"
+
+
+def test_pressure_pushes_a_circle_out_with_force_p_r(example):
+    # f = P (y', -x') per unit xi; on the circle z = R e^{i xi} that is P R e^{i xi}, the
+    # mode k = 1 alone; and E = -P * pi R^2.
+    radius, pressure = 6.0, 3e-4
+    with example():
+        params = Parameters({"radius": radius, "pressure": pressure},
+                            get_registry().parameter_specs().values())
+        model = build_model(params, ["pressure"], "run_and_reverse")
+    modes = circle_modes(radius, model.cutoff, 0.4 - 0.2j)
+    fhat, dpose = force_modes(model, modes, np.zeros(3))
+    expected = np.zeros_like(fhat)
+    expected[model.cutoff + 1] = pressure * radius
+    np.testing.assert_allclose(fhat, expected, atol=1e-14 * pressure * radius)
+    xi = 2 * np.pi * np.arange(model.nodes) / model.nodes
+    z = 0.4 - 0.2j + radius * np.exp(1j * xi)
+    zp = 1j * radius * np.exp(1j * xi)
+    term = model.terms[0]
+    energy = 2 * np.pi / model.nodes * term.density(z.real, z.imag, zp.real, zp.imag, 0, 0,
+                                                     np.zeros(3)).sum()
+    assert energy == pytest.approx(-pressure * np.pi * radius**2, rel=1e-12)
+
+
+def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
+    from softcell.core.ensemble import simulate
+    from softcell.core.runconfig import RunConfig
+
+    with example():
+        config = RunConfig(parameters={"radius": 5.0, "duration": 8.0}).updated(
+            components={"driving_protocol": "run_and_reverse",
+                        "integrator": "explicit_auto"})
+        path = simulate(config, tmp_path, membrane=False, progress=False)[0]
+    ds = xr.open_dataset(path)
+    t = ds.time.values
+    x, y, angle = (ds[n].values[0] for n in ("bot_x", "bot_y", "bot_angle"))
+    phase = ds.bot_phase.values[0]
+    run = (phase[:-1] == 1) & (phase[1:] == 1)
+    along = ((np.diff(x) * np.cos(angle[:-1]) + np.diff(y) * np.sin(angle[:-1]))
+             / np.diff(t))[run]
+    v = 0.04275 / 0.00285  # F0 / gamma_T = 15 cm/s
+    assert np.all(np.isclose(np.abs(along), v, rtol=1e-6))
+    assert (along > 0).any() and (along < 0).any()
+
+
+def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path):
+    from softcell.core.ensemble import simulate
+    from softcell.core.runconfig import RunConfig
+
+    runs = {}
+    with example():
+        for integrator in ("explicit_auto", "explicit_euler"):
+            config = RunConfig(parameters={"radius": 4.0, "duration": 0.3, "cutoff": 4,
+                                           "nodes": 64, "stored_nodes": 16}).updated(
+                components={"integrator": integrator})
+            runs[integrator] = xr.open_dataset(
+                simulate(config, tmp_path / integrator, seed=3, progress=False)[0])
+        params = Parameters({"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16},
+                            get_registry().parameter_specs().values())
+        model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
+        auto = get_registry().get("integrator", "explicit_auto")(params)
+        from softcell.core.engine import explicit_decay_rate
+
+        dt = auto.step(model)
+    assert dt > 1e-6 and dt * explicit_decay_rate(model) <= 2 * 0.5
+    assert round(0.01 / dt) * dt == pytest.approx(0.01, rel=1e-12)
+    for name in ("bot_x", "bot_y", "cell_x", "cell_y"):
+        np.testing.assert_allclose(runs["explicit_auto"][name], runs["explicit_euler"][name],
+                                   atol=2e-3)
+
+
+def test_hysteresis_holds_its_label_between_the_thresholds(example):
+    with example():
+        cls = get_registry().get("stopgo_detector", "hysteresis")
+        detector = cls(Parameters({"go_above": 0.05, "stop_below": 0.02}, cls.parameters))
+        with pytest.raises(Exception, match="stop_below"):
+            cls(Parameters({"go_above": 0.01, "stop_below": 0.02}, cls.parameters))
+    speed = np.array([[0.0, 0.03, 0.06, 0.04, 0.03, 0.01, 0.03, np.nan, 0.04, 0.07]])
+    expected = np.array([[0, 0, 1, 1, 1, 0, 0, -1, 0, 1]])
+    np.testing.assert_array_equal(detector.label(speed, 0.01), expected)
