@@ -45,8 +45,8 @@ def _trend(radii: np.ndarray, values: np.ndarray) -> tuple[float, float]:
     from scipy.stats import spearmanr
 
     ok = np.isfinite(values)
-    if ok.sum() < 3:
-        return np.nan, np.nan
+    if ok.sum() < 3 or np.ptp(values[ok]) == 0:
+        return np.nan, np.nan  # no trend to rank
     result = spearmanr(radii[ok], values[ok])
     return float(result.statistic), float(result.pvalue)
 

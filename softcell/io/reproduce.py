@@ -154,6 +154,8 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     if design.video.radius not in design.radii:
         raise SoftcellError(f"the video's radius {design.video.radius:g} cm is not among the "
                             f"design's radii {list(design.radii)}")
+    if workers is not None and workers < 1:
+        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
     if scheduler is None and workers is None:
         workers = os.cpu_count() or 1
     out = Path(out)

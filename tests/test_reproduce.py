@@ -1,0 +1,163 @@
+"""softcell reproduce: a small design end to end, the figures, the report and its verdicts."""
+
+import json
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import softcell
+from softcell.cli import main
+from softcell.core.errors import SoftcellError
+from softcell.io.report import findings
+from softcell.io.reproduce import Design, VideoDesign, reproduce
+
+TINY = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0, discard=5.0,
+              free_bot_realizations=2, video=VideoDesign(radius=12.0, span=5.0))
+FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    out = tmp_path_factory.mktemp("results")
+    outcome = reproduce(out, TINY, seed=4, workers=1, progress=False, log=None)
+    return out, outcome
+
+
+def test_every_figure_is_written_as_png_and_pdf(results):
+    out, _ = results
+    for name in FIGURES:
+        assert (out / "figures" / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (out / "figures" / f"{name}.pdf").read_bytes()[:5] == b"%PDF-"
+
+
+def test_report_states_what_ran_and_links_every_figure(results):
+    out, outcome = results
+    md = (out / "report.md").read_text()
+    for text in (f"softcell {softcell.__version__}", "integrator = rodas4", "Seed 4",
+                 "SeedSequence(4, spawn_key=(p, r))", "Findings: the paper beside this run",
+                 "The experimental pipeline", "| bending_stiffness | 0.57 | N cm2 |"):
+        assert text in md
+    for name in FIGURES:
+        assert f"(figures/{name}.png)" in md and f"(figures/{name}.pdf)" in md
+
+    class Sources(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.links = []
+
+        def handle_starttag(self, tag, attrs):
+            self.links += [v for k, v in attrs if k in ("src", "href")]
+
+    parser = Sources()
+    parser.feed((out / "report.html").read_text())
+    assert len(parser.links) == 2 * len(FIGURES)
+    assert all((out / link).is_file() for link in parser.links)
+    assert set(outcome.steps) == {"simulations", "free_bot", "analysis", "video", "figures",
+                                  "report"}
+
+
+def test_outputs_carry_cf_attributes_and_their_provenance(results):
+    out, _ = results
+    analysis = softcell.read_dataset(out / "analysis.nc")
+    np.testing.assert_array_equal(analysis["radius"].values, [4.0, 12.0])
+    for name, var in analysis.data_vars.items():
+        assert "units" in var.attrs and "long_name" in var.attrs, name
+    assert json.loads(analysis.attrs["softcell_components"])["integrator"] == "rodas4"
+    assert analysis.attrs["softcell_seed"] == 4
+    tracked = softcell.read_dataset(out / "video" / "tracked.nc")
+    assert tracked.attrs["softcell_origin"] == "tracking"
+
+
+def test_the_tracked_film_follows_the_simulated_cell(results):
+    # Independent of the tracker's own tests: frame k of the film is the state at
+    # discard + k / fps of realization 0 at the video's radius.
+    out, _ = results
+    tracked = softcell.read_dataset(out / "video" / "tracked.nc").isel(realization=0)
+    sim = softcell.read_dataset(out / "simulations" / "point001_realization0000.nc")
+    sim = sim.isel(realization=0)
+    # At 10 px/cm: the membrane's centroid within 0.3 px, the bot (a smaller contour, partly
+    # hidden by the membrane band when they touch) within 1 px.
+    t = TINY.discard + tracked["time"].values
+    for name, atol in (("cell_x", 0.03), ("cell_y", 0.03), ("bot_x", 0.1), ("bot_y", 0.1)):
+        expected = np.interp(t, sim["time"].values, sim[name].values)
+        np.testing.assert_allclose(tracked[name].values, expected, atol=atol)
+    assert not (out / "video" / "cell.mkv").exists()
+
+
+def test_a_rerun_keeps_the_finished_realizations(results):
+    out, _ = results
+    files = sorted((out / "simulations").glob("*.nc")) + sorted((out / "free_bot").glob("*.nc"))
+    assert len(files) == 2 * 2 + 2
+    before = {f: (f.stat().st_mtime_ns, f.read_bytes()) for f in files}
+    reproduce(out, TINY, seed=4, workers=1, progress=False, log=None)
+    assert {f: (f.stat().st_mtime_ns, f.read_bytes()) for f in files} == before
+
+
+def test_figures_command_draws_what_its_inputs_allow(results, tmp_path, capsys):
+    out, _ = results
+    assert main(["figures", str(out / "analysis.nc"), "-o", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "note: fig2 not drawn: needs the simulations" in printed
+    assert "note: figS1 not drawn: needs the free bot's analysis" in printed
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == [
+        "fig3.png", "fig4.png", "figS2.png", "figS3.png"]
+    free = softcell.read_dataset(out / "free_bot_analysis.nc")
+    assert main(["figures", str(out / "free_bot_analysis.nc"), "-o", str(tmp_path)]) == 2
+    assert "radius sweep" in capsys.readouterr().err
+    assert "radius" not in free.dims
+
+
+def _verdict(rows, topic):
+    return next(r.verdict for r in rows if r.topic == topic)
+
+
+def test_verdicts_follow_their_stated_rules(results):
+    out, _ = results
+    analysis = softcell.read_dataset(out / "analysis.nc")
+    radii = np.arange(4.0, 14.0)
+    ten = xr.concat([analysis.isel(radius=0)] * radii.size, dim="radius").assign_coords(
+        radius=radii)
+
+    def with_cell(ds, name, values):
+        ds = ds.copy()
+        data = ds[name].values.copy()
+        data[:, 0] = values
+        ds[name] = (ds[name].dims, data, ds[name].attrs)
+        return ds
+
+    up = with_cell(ten, "mean_stop_duration", 0.3 + 0.05 * radii)
+    assert _verdict(findings(up), "<tau_s> against R") == "agrees"
+    down = with_cell(ten, "mean_stop_duration", 1.0 - 0.05 * radii)
+    assert _verdict(findings(down), "<tau_s> against R") == "differs"
+    slower = with_cell(ten, "ballistic_velocity", 3.0 / radii)
+    assert _verdict(findings(slower), "ballistic velocity against R") == "agrees"
+
+    regimes = ten.copy()
+    regimes["regime"] = ("radius", np.array([0, 0, 1, 1, 2, 2, 2, 2, 2, 2], dtype=np.int8))
+    assert _verdict(findings(regimes), "regime per R") == "agrees"
+    regimes["regime"] = ("radius", np.array([0, 1, 1, 1, 2, 2, 2, 2, 2, 2], dtype=np.int8))
+    assert _verdict(findings(regimes), "regime per R") == "partly"
+    regimes["regime"] = ("radius", np.array([1, 1, 1, 1, 2, 2, 2, 2, 1, 2], dtype=np.int8))
+    assert _verdict(findings(regimes), "regime per R") == "differs"
+
+    peaked = with_cell(regimes, "mean_go_duration",
+                       [0.3, 0.5, 0.9, 0.8, 0.6, 0.6, 0.61, 0.6, 0.6, 0.6])
+    peaked["regime"] = ("radius", np.array([0, 0, 1, 1, 2, 2, 2, 2, 2, 2], dtype=np.int8))
+    assert _verdict(findings(peaked), "<tau_g> against R") == "agrees"
+    flat_then_low = with_cell(peaked, "mean_go_duration", np.linspace(0.9, 0.3, 10))
+    assert _verdict(findings(flat_then_low), "<tau_g> against R") == "differs"
+
+    theory = with_cell(ten, "v0_hat", 1.0)
+    theory = with_cell(theory, "ballistic_velocity", 1.05)
+    assert _verdict(findings(theory), "theory: v0 hat against the ballistic fit") == "agrees"
+    theory = with_cell(theory, "ballistic_velocity", 1.2)
+    assert _verdict(findings(theory), "theory: v0 hat against the ballistic fit") == "differs"
+
+
+def test_bad_requests_are_refused_with_the_value(tmp_path):
+    with pytest.raises(SoftcellError, match="video's radius 8 cm is not among"):
+        reproduce(tmp_path, Design("x", radii=(4.0, 12.0), video=VideoDesign(radius=8.0)),
+                  progress=False, log=None)
+    assert main(["reproduce", "--quick", "--workers", "0", "-o", str(tmp_path)]) == 2
