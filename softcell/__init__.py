@@ -16,6 +16,10 @@ from softcell.core.params import Parameters
 
 if TYPE_CHECKING:
     from softcell.core.analysis import analyze
+    from softcell.core.ensemble import simulate
+    from softcell.core.runconfig import RunConfig
+    from softcell.io.figures import make_figures
+    from softcell.io.reproduce import reproduce
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.io.schema import validate
 
@@ -23,13 +27,17 @@ __all__ = [
     "ConfigError",
     "ParameterError",
     "Parameters",
+    "RunConfig",
     "SchemaError",
     "SoftcellError",
     "__version__",
     "analyze",
     "hookimpl",
+    "make_figures",
     "open_dataset",
     "read_dataset",
+    "reproduce",
+    "simulate",
     "validate",
     "write_dataset",
 ]
@@ -40,6 +48,10 @@ _LAZY = {
     "write_dataset": "softcell.io.netcdf",
     "validate": "softcell.io.schema",
     "analyze": "softcell.core.analysis",
+    "simulate": "softcell.core.ensemble",
+    "RunConfig": "softcell.core.runconfig",
+    "reproduce": "softcell.io.reproduce",
+    "make_figures": "softcell.io.figures",
 }
 
 if "xarray" in __import__("sys").modules:  # register ds.softcell now; else when softcell

@@ -25,10 +25,11 @@ def test_every_contract_method_is_documented():
             assert f"{method}(" in DOC, f"docs/plugins.md lacks {contract.__name__}.{method}"
 
 
-def test_python_examples_in_the_docs_run():
+def test_python_examples_in_the_docs_run(tmp_path, monkeypatch):
     import re
 
-    for name in ("analysis.md",):
+    monkeypatch.chdir(tmp_path)  # examples may write files
+    for name in ("getting-started.md", "model.md", "analysis.md"):
         text = (Path(__file__).parents[1] / "docs" / name).read_text()
         blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
         assert blocks, f"docs/{name} has no python example"
