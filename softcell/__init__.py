@@ -19,8 +19,8 @@ if TYPE_CHECKING:
     from softcell.core.ensemble import simulate
     from softcell.core.runconfig import RunConfig
     from softcell.io.figures import make_figures
-    from softcell.io.reproduce import reproduce
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
+    from softcell.io.reproduce import reproduce
     from softcell.io.schema import validate
 
 __all__ = [
