@@ -2,7 +2,7 @@
 
 Runs the quick design from scratch in a temporary directory with every core, the way the
 README's first command does, and reports the wall time of each step and of the whole.
-Target: under 10 minutes on 2 cores. Takes ~6 minutes: run it with
+Target: under 10 minutes on 2 cores. Takes ~4.5 minutes: run it with
 ``python benchmarks/run.py reproduce``.
 """
 

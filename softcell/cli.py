@@ -133,7 +133,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
     options = {k.removeprefix("param_"): v for k, v in vars(args).items()
                if k.startswith("param_") and v is not None}
-    ds = open_inputs(args.inputs)
+    ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
     result = analyze(ds, options, progress=not args.quiet)
     path = write_dataset(result, args.output)
     print(f"analysis of {_describe(ds)} written to {path}")

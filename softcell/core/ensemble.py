@@ -237,7 +237,7 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
     if sum([scheduler is not None, workers != 1, client is not None]) > 1:
         raise SoftcellError(f"workers = {workers}, scheduler = {scheduler!r} and a client "
                             "exclude each other: give one")
-    out = Path(out)
+    out = Path(out).resolve()  # workers of a cluster have their own working directories
     out.mkdir(parents=True, exist_ok=True)
     tasks = plan(config, out, realizations=realizations, seed=seed, membrane=membrane)
     todo = [t for t in tasks if not Path(t.path).exists()]

@@ -346,6 +346,14 @@ def figure_s3(analysis: xr.Dataset, radius: float = 12.0):
     return fig
 
 
+def _metadata(fmt: str, name: str) -> dict[str, str]:
+    from softcell._version import __version__
+
+    creator = f"softcell {__version__} ({name})"
+    return {"png": {"Software": creator}, "pdf": {"Creator": creator},
+            "svg": {"Creator": creator}}.get(fmt, {})
+
+
 def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
                  simulations: xr.Dataset | None = None, free_bot: xr.Dataset | None = None,
                  tracked: xr.Dataset | None = None,
@@ -396,7 +404,7 @@ def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
         for fmt in formats:
             path = out / f"{name}.{fmt}"
             tmp = path.with_name(f".{path.stem}.tmp.{fmt}")
-            fig.savefig(tmp, dpi=150)
+            fig.savefig(tmp, dpi=150, metadata=_metadata(fmt, name))
             os.replace(tmp, path)
             files.append(path)
         result.files[name] = files

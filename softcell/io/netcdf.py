@@ -161,9 +161,12 @@ def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.D
     return parts[0] if len(parts) == 1 else combine_sweep(parts, names)
 
 
-def open_inputs(paths: list[str | os.PathLike[str]]) -> xr.Dataset:
+def open_inputs(paths: list[str | os.PathLike[str]],
+                chunks: Mapping[str, int] | None = None) -> xr.Dataset:
     """Open files and directories (each a sweep, see :func:`open_dataset`) as one Dataset: a
-    single file as is, several files combined along their swept parameters."""
+    single file as is, several files combined along their swept parameters. ``chunks`` as
+    for :func:`open_dataset` (``{}``: one dask chunk per file, so that an analysis holds one
+    parameter point in memory at a time)."""
     files: list[Path] = []
     for path in map(Path, paths):
         if path.is_dir():
@@ -172,7 +175,7 @@ def open_inputs(paths: list[str | os.PathLike[str]]) -> xr.Dataset:
             files.append(path)
         else:
             raise SoftcellError(f"no such file or directory: {path}")
-    return _combine(files)
+    return _combine(files, chunks)
 
 
 def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:

@@ -158,7 +158,7 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
     if scheduler is None and workers is None:
         workers = os.cpu_count() or 1
-    out = Path(out)
+    out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     outcome = Outcome(out, design, seed)
     say = log or (lambda _: None)
@@ -181,7 +181,9 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
             simulate(free, out / "free_bot", realizations=design.free_bot_realizations,
                      seed=seed, client=client, membrane=False, progress=progress)
     with step("analysis", "analysing the sweep and the free bot"):
-        analysis = analyze(open_dataset(out / "simulations"), options, progress=progress)
+        # One dask chunk per file: the analysis holds one radius in memory at a time.
+        analysis = analyze(open_dataset(out / "simulations", chunks={}), options,
+                           progress=progress)
         write_dataset(analysis, out / "analysis.nc")
         free_analysis = analyze(open_dataset(out / "free_bot"), options)
         write_dataset(free_analysis, out / "free_bot_analysis.nc")
@@ -191,7 +193,7 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         outcome.notes.extend(video.pop("notes"))
     with step("figures", "drawing the figures"):
         figures = make_figures(read_dataset(out / "analysis.nc"), out / "figures",
-                               simulations=open_dataset(out / "simulations"),
+                               simulations=open_dataset(out / "simulations", chunks={}),
                                free_bot=read_dataset(out / "free_bot_analysis.nc"),
                                tracked=read_dataset(out / "video" / "tracked_analysis.nc"))
         outcome.notes.extend(f"{name} not drawn: {why}" for name, why in
