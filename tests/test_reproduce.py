@@ -56,6 +56,11 @@ def test_report_states_what_ran_and_links_every_figure(results):
     assert all((out / link).is_file() for link in parser.links)
     assert set(outcome.steps) == {"simulations", "free_bot", "analysis", "video", "figures",
                                   "report"}
+    summary = json.loads((out / "findings.json").read_text())
+    assert summary["seed"] == 4 and summary["design"] == "tiny"
+    for row in summary["findings"]:
+        assert row["topic"] in md and row["verdict"] in (
+            "agrees", "partly", "differs", "not measured")
 
 
 def test_outputs_carry_cf_attributes_and_their_provenance(results):

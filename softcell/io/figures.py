@@ -247,6 +247,7 @@ def _against_radius(ax, analysis: xr.Dataset, name: str, label: str,
     if tracked is not None:
         ax.plot([_tracked_radius(tracked)], [float(tracked[name].sel(body=body))], "^",
                 color=EXP_COLOR, ms=7, label="tracked video")
+    ax.margins(y=0.12)
     ax.set_xlabel("R (cm)")
     ax.set_ylabel(label)
 

@@ -13,7 +13,7 @@ import json
 import os
 import platform
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -346,6 +346,8 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
                  notes: Sequence[str], figures, video: dict[str, Any] | None) -> tuple[Path, Path]:
     """Write ``out/report.md`` and ``out/report.html`` from the files of a reproduction.
 
+    Also writes ``out/findings.json``: the findings table as a list of objects.
+
     Returns
     -------
     (Path, Path)
@@ -362,6 +364,7 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
     components = json.loads(analysis.attrs.get("softcell_components", "{}"))
     options = json.loads(analysis.attrs["softcell_analysis_options"])
     command = f"softcell reproduce --{design.name} -o {out} --seed {seed}"
+    rows = findings(analysis, free_bot)
 
     blocks = [
         Block("h1", "softcell: reproduction of \"Run and tumble dynamics of a soft robotic "
@@ -388,8 +391,7 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
             for k, v in sorted(params.items())])),
         Block("h2", "Findings: the paper beside this run"),
         Block("table", (["finding", "paper", "measured here", "verdict", "verdict rule"],
-                        [[f.topic, f.paper, f.measured, f.verdict, f.rule]
-                         for f in findings(analysis, free_bot)])),
+                        [[f.topic, f.paper, f.measured, f.verdict, f.rule] for f in rows])),
         Block("h2", "Per radius (cell GC)"),
         _per_radius(analysis),
     ]
@@ -404,7 +406,10 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
         blocks.append(Block("p", f"{name} was not drawn: {why}."))
     md, page = out / "report.md", out / "report.html"
     title = "softcell reproduction report"
-    for path, text in ((md, _markdown(blocks)), (page, _html(blocks, title))):
+    summary = json.dumps({"softcell_version": __version__, "design": design.name, "seed": seed,
+                          "findings": [asdict(f) for f in rows]}, indent=1)
+    for path, text in ((md, _markdown(blocks)), (page, _html(blocks, title)),
+                       (out / "findings.json", summary)):
         tmp = path.with_name(f".{path.name}.tmp")
         tmp.write_text(text, encoding="utf-8")
         os.replace(tmp, path)

@@ -10,6 +10,7 @@ directory::
     video/                  one realization rendered, tracked and analysed as an experiment
     figures/                Fig. 2, 3, 4, S1, S2, S3 as PNG and PDF
     report.md, report.html  what ran, every figure, the paper's findings beside ours
+    findings.json           the findings table, for scripts
 
 Run again into the same directory, it keeps every finished realization (as ``softcell
 simulate`` does), so an interrupted run resumes where it stopped; the
@@ -157,7 +158,8 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     if workers is not None and workers < 1:
         raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
     if scheduler is None and workers is None:
-        workers = os.cpu_count() or 1
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+            else os.cpu_count() or 1
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     outcome = Outcome(out, design, seed)
