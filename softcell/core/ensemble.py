@@ -17,7 +17,8 @@ import hashlib
 import json
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -263,35 +264,27 @@ def _duration(task: Task) -> float:
     return float(Parameters(task.values, get_registry().parameter_specs().values()).duration)
 
 
-def cluster_client(workers: int, scheduler: str | None = None):
-    """A dask.distributed Client: of the scheduler at ``scheduler``, or of a new local cluster
-    of ``workers`` single-threaded processes (closed with the client). Use it as a context
-    manager."""
+@contextmanager
+def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
+    """A dask.distributed Client, as a context manager: of the scheduler at ``scheduler``, or
+    of a new local cluster of ``workers`` single-threaded processes, closed on exit."""
     import logging
 
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
         try:
-            return Client(scheduler, timeout="30s")
+            client = Client(scheduler, timeout="30s")
         except OSError as exc:
             raise SoftcellError(f"cannot reach the dask scheduler at {scheduler!r}: {exc}"
                                 ) from None
+        with client:
+            yield client
+        return
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
-    client = Client(cluster)
-    client.close = _closing_cluster(client.close, cluster)
-    return client
-
-
-def _closing_cluster(close, cluster):
-    def close_both(*args, **kwargs):
-        try:
-            return close(*args, **kwargs)
-        finally:
-            cluster.close()
-    return close_both
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client
 
 
 def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] | None = None,

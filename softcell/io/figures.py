@@ -14,6 +14,7 @@ green for the decoupled one (from the analysis's ``regime``).
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -114,8 +115,6 @@ def _trajectory(ax, simulations: xr.Dataset, radius: float, span: float, analysi
 
 def json_option(analysis: xr.Dataset, name: str):
     """An analysis option stored in the analysis file (``softcell_analysis_options``)."""
-    import json
-
     return json.loads(analysis.attrs["softcell_analysis_options"])[name]
 
 
@@ -229,8 +228,6 @@ def _pdf_panel(ax, analysis: xr.Dataset, kind: str, radii: Sequence[float],
 
 
 def _tracked_radius(tracked: xr.Dataset) -> float:
-    import json
-
     return float(json.loads(tracked.attrs.get("softcell_parameters", "{}")).get("radius",
                                                                                  np.nan))
 
