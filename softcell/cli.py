@@ -7,17 +7,26 @@ them too (flags win). Bad input is reported as one line on stderr with exit stat
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from softcell._version import __version__
 from softcell.core.config import CHECKPOINT_EVERY
 from softcell.core.errors import SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig, load_config
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a bad command line is one line on stderr (exit status 2), like every
+    other bad input."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def _flag(name: str) -> str:
@@ -65,11 +74,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
 def _cmd_plugins(args: argparse.Namespace) -> int:
     from softcell.core.registry import KINDS, get_registry
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        registry = get_registry()
-    for warning in caught:
-        print(f"warning: {warning.message}", file=sys.stderr)
+    registry = get_registry()
     for kind in KINDS.values():
         entries = registry.entries(kind)
         print(f"{kind} ({len(entries)})")
@@ -82,12 +87,23 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
             for spec in cls.parameters:
                 unit = "" if spec.unit == "1" else f" {spec.unit}"
                 print(f"        {spec.name} = {spec.default}{unit}  ({spec.long_name})")
+    print(f"skipped ({len(registry.skipped)})")
+    if not registry.skipped:
+        print("    (none)")
+    for plugin, reason in registry.skipped:
+        print(f"    {plugin}: {reason}")
+        print(f"        origin: {registry.skipped_origins.get(plugin, 'unknown')}")
     return 0
 
 
 def _cmd_params(args: argparse.Namespace) -> int:
+    from softcell.core.limits import check_run
+
     config = _config(args)
+    config.check_components()
     points = expand_sweep(config.parameters, config.extra_specs())
+    for _, params in points:
+        check_run(params)
     _, first = points[0]
     swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
     width = max(len(n) for n in first)
@@ -111,17 +127,18 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]
     config = config.updated(components=components)
     run = config.run
-    realizations = args.realizations or run.get("realizations", 1)
+    realizations = args.realizations if args.realizations is not None else run.get(
+        "realizations", 1)
     seed = args.seed if args.seed is not None else run.get("seed", 0)
     for name, value in (("realizations", realizations), ("workers", args.workers)):
         if value is not None and value < 1:
             raise SoftcellError(f"--{name} = {value} is not allowed: must be >= 1")
-    if not args.checkpoint_every > 0:
+    if not (math.isfinite(args.checkpoint_every) and args.checkpoint_every > 0):
         raise SoftcellError(f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
-                            "must be > 0 s")
+                            "must be finite and > 0 s")
     paths = simulate(config, args.output, realizations=realizations, seed=seed,
                      workers=args.workers or 1, scheduler=args.scheduler,
-                     membrane=not args.free_bot,
+                     membrane=not args.free_bot, overwrite=args.overwrite,
                      progress=not args.quiet, checkpoint_every=args.checkpoint_every)
     print(f"{len(paths)} files in {args.output}")
     return 0
@@ -129,10 +146,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from softcell.core.analysis import analyze
+    from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs, write_dataset
 
     options = {k.removeprefix("param_"): v for k, v in vars(args).items()
                if k.startswith("param_") and v is not None}
+    check_output(args.output, "analysis", inputs=args.inputs, overwrite=args.overwrite)
     ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
     result = analyze(ds, options, progress=not args.quiet)
     path = write_dataset(result, args.output)
@@ -141,9 +160,11 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
+    from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
     from softcell.io.video import render
 
+    check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     ds = open_inputs([args.input])
     try:
         point = {k: int(v) for k, v in (item.split("=") for item in args.point.split(","))} \
@@ -172,6 +193,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
+    from softcell.io.files import check_output
     from softcell.io.netcdf import write_dataset
     from softcell.io.video import track
 
@@ -179,8 +201,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
         origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
     except ValueError:
         origin = ()
-    if len(origin) != 2:
-        raise SoftcellError(f"--origin = {args.origin!r} is not allowed: must be X,Y in cm")
+    if len(origin) != 2 or not all(map(math.isfinite, origin)):
+        raise SoftcellError(f"--origin = {args.origin!r} is not allowed: must be X,Y, two "
+                            "finite coordinates in cm")
+    if not args.video.is_file():
+        raise SoftcellError(f"no such video file: {args.video}")
+    check_output(args.output, "tracking", inputs=[args.video], overwrite=args.overwrite)
     ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,
                origin=origin, fps=args.fps, nodes=args.nodes, radius=args.radius,
                progress=not args.quiet)
@@ -191,9 +217,16 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
 
 def _cmd_figures(args: argparse.Namespace) -> int:
-    from softcell.io.figures import make_figures
+    from softcell.io.figures import FIGURES, FORMATS, make_figures
+    from softcell.io.files import check_output
     from softcell.io.netcdf import open_dataset, read_dataset
 
+    inputs = [p for p in (args.analysis, args.simulations, args.free_bot, args.tracked) if p]
+    check_output(args.output, "figure", inputs=inputs, directory=True)
+    for name in FIGURES:
+        for fmt in FORMATS:
+            check_output(args.output / f"{name}.{fmt}", "figure", inputs=inputs,
+                         overwrite=args.overwrite)
     made = make_figures(
         read_dataset(args.analysis), args.output,
         simulations=open_dataset(args.simulations) if args.simulations else None,
@@ -211,7 +244,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
     outcome = reproduce(args.output, DESIGNS["full" if args.full else "quick"], seed=args.seed,
                         workers=args.workers, scheduler=args.scheduler,
-                        progress=not args.quiet)
+                        overwrite=args.overwrite, progress=not args.quiet)
     print(f"done in {sum(outcome.steps.values()):.0f} s: {outcome.report}")
     return 0
 
@@ -233,10 +266,11 @@ def _describe(ds: Any) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``softcell`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="softcell", description="Simulate, track and analyse a soft robotic cell.")
     parser.add_argument("--version", action="version", version=f"softcell {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                parser_class=_Parser)
 
     p = sub.add_parser("plugins", help="list every component by kind, with origin and parameters")
     p.set_defaults(func=_cmd_plugins)
@@ -259,6 +293,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "paper's scheme, the reference)")
     p.add_argument("--energy-terms", help="comma-separated energy terms")
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
+    p.add_argument("--overwrite", action="store_true",
+                   help="recompute files in OUT made with other settings (and remove "
+                        "simulation files that are no part of this request) instead of "
+                        "stopping")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--checkpoint-every", type=float, default=CHECKPOINT_EVERY, metavar="SECONDS",
                    help="wall seconds between checkpoints of a running realization "
@@ -274,6 +312,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT",
                    help="NetCDF files or directories of one sweep (softcell simulate / track)")
     p.add_argument("-o", "--output", type=Path, required=True, help="analysis file (.nc)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing file that is not a softcell analysis")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_parameter_flags(p, list(ANALYSIS_OPTIONS.values()), "analysis options",
                          "SPEC section 6; stored in the output file")
@@ -283,6 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("input", type=Path, help="simulation file or sweep directory")
     p.add_argument("-o", "--output", type=Path, required=True,
                    help="video: .mkv/.avi (lossless, for tracking) or .mp4")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing video")
     p.add_argument("--realization", type=int, default=0)
     p.add_argument("--point", help="sweep point, e.g. radius=1 (an index)")
     p.add_argument("--px-per-cm", type=float, default=10.0, help="scale [px/cm] (default 10)")
@@ -302,6 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("track", help="track a top-view video into the simulation schema")
     p.add_argument("video", type=Path)
     p.add_argument("-o", "--output", type=Path, required=True, help="tracked file (.nc)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing file that is not a softcell tracking file")
     p.add_argument("--px-per-cm", type=float, help="scale [px/cm]")
     p.add_argument("--arena-size", type=float,
                    help="world width of the frame [cm], to derive the scale")
@@ -316,6 +359,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "a radius sweep")
     p.add_argument("analysis", type=Path, help="analysis file of a radius sweep (.nc)")
     p.add_argument("-o", "--output", type=Path, required=True, help="directory for the figures")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing fig*.png/pdf files that softcell did not draw")
     p.add_argument("--simulations", type=Path,
                    help="the sweep's simulation directory (trajectories of Fig. 2)")
     p.add_argument("--free-bot", type=Path, help="analysis of free-bot runs (Fig. S1)")
@@ -331,6 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
     design.add_argument("--full", action="store_true",
                         help="the paper's design: 25 realizations of 900/1800 s per radius")
     p.add_argument("-o", "--output", type=Path, required=True, help="results directory")
+    p.add_argument("--overwrite", action="store_true",
+                   help="recompute what the directory holds from another design, seed or "
+                        "version (or use a directory softcell did not make) instead of stopping")
     p.add_argument("--seed", type=int, default=0, help="root seed of every random stream")
     _add_cluster_flags(p, "local worker processes (default: every core)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -338,11 +386,45 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"softcell: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``softcell`` command; returns the exit status (2 for bad input)."""
-    args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except SoftcellError as exc:
-        print(f"softcell: error: {exc}", file=sys.stderr)
-        return 2
+    """Run the ``softcell`` command; returns the exit status (2 for bad input, 130 when
+    interrupted)."""
+    from softcell.core.registry import PluginWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("once", PluginWarning)
+        original, warnings.showwarning = warnings.showwarning, _plugin_warning(_show_warning)
+        try:
+            args = build_parser().parse_args(argv)  # builds the registry: plugins may warn
+            return int(args.func(args))
+        except SoftcellError as exc:
+            print(f"softcell: error: {_one_line(exc)}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt as exc:
+            text = str(exc) or "interrupted; rerun the same command to resume"
+            print(f"softcell: {_one_line(text)}", file=sys.stderr)
+            return 130
+        finally:
+            warnings.showwarning = original
+
+
+def _plugin_warning(show):
+    """Plugin warnings as one line each; other warnings as Python shows them."""
+    from softcell.core.registry import PluginWarning
+
+    default = warnings.showwarning
+
+    def dispatch(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, PluginWarning):
+            show(message, category, filename, lineno, file, line)
+        else:
+            default(message, category, filename, lineno, file, line)
+    return dispatch
+
+
+def _one_line(exc: object) -> str:
+    return " ".join(str(exc).split())

@@ -1,5 +1,6 @@
 """The command line: plugins listing, parameter errors as one line with exit status 2."""
 
+import shutil
 import subprocess
 import sys
 
@@ -52,9 +53,15 @@ def test_analyze_a_simulated_sweep(tmp_path, capsys):
     assert main(["simulate", "--radius", "4,12", "--duration", "0.3", "--dt", "1e-5",
                  "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--quiet",
                  "-o", str(run)]) == 0
-    out = run / "analysis.nc"
-    for _ in range(2):  # the second time, the analysis file in the directory is left out
+    out = tmp_path / "analysis.nc"
+    for _ in range(2):  # the second time, its own earlier output is replaced
         assert main(["analyze", str(run), "-o", str(out), "--discard", "0.05", "--quiet"]) == 0
+    assert "1 realization(s) at 2 radius" in capsys.readouterr().out
+    # An analysis file inside a sweep directory is left out of the sweep; writing one there
+    # is refused (it is inside an input), so it is placed there by hand.
+    shutil.copy(out, run / "analysis.nc")
+    assert main(["analyze", str(run), "-o", str(tmp_path / "again.nc"), "--discard", "0.05",
+                 "--quiet"]) == 0
     assert "1 realization(s) at 2 radius" in capsys.readouterr().out
     result = softcell.open_dataset(out)
     assert list(result.radius.values) == [4.0, 12.0]

@@ -2,9 +2,10 @@
 
 Every random stream comes from one root seed: realization r of parameter point p draws from
 ``SeedSequence(seed, spawn_key=(p, r))``, so results do not depend on the number of workers or
-their order. Each (point, realization) is written atomically to its own file; finished files
-are skipped when the same command runs again, and a long realization checkpoints its state
-(``.<name>.ckpt.npz``) so that a killed run resumes to the same bytes.
+their order. Each (point, realization) is written atomically to its own file; a finished file
+is reused when the same request runs again (and only then: a file made with any other
+setting stops the run, :func:`resume_plan`), and a long realization checkpoints its state
+(``.<name>.ckpt.npz``) so that a killed or interrupted run resumes to the same bytes.
 
 Beyond one process the realizations run on a dask.distributed cluster, one task each: a local
 cluster of ``workers`` processes, or the cluster whose scheduler listens at ``scheduler``
@@ -13,11 +14,13 @@ cluster of ``workers`` processes, or the cluster whose scheduler listens at ``sc
 
 from __future__ import annotations
 
-import hashlib
 import json
+import math
 import os
 import time
-from collections.abc import Callable, Iterator
+import warnings
+import zipfile
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,9 +41,11 @@ from softcell.core.engine import (
     phase_at,
     sample_times,
 )
-from softcell.core.errors import SoftcellError
-from softcell.core.params import Parameters, expand_sweep
+from softcell.core.errors import Interrupted, SoftcellError
+from softcell.core.limits import check_run, check_seed, file_bytes
+from softcell.core.params import Parameters, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig
+from softcell.io.files import atomic_write
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,28 @@ class Task:
     @property
     def name(self) -> str:
         return f"point {self.point} realization {self.realization}"
+
+    @property
+    def stored_components(self) -> dict[str, Any]:
+        """The component names as its file stores them (a free bot has no energy terms)."""
+        components = {**self.components, "membrane": self.membrane}
+        if not self.membrane:
+            components["energy_terms"] = []
+        return components
+
+    def request(self, extra_specs: Iterable[ParameterSpec] = ()) -> dict[str, Any]:
+        """Every setting a file or checkpoint of this task must have been made with, in the
+        order they are compared: each parameter, the components, seed, spawn key, version."""
+        params = json.loads(Parameters(self.values, extra_specs).to_attrs()["softcell_parameters"])
+        return _request(params, self.stored_components, self.seed,
+                        f"{self.point},{self.realization}", __version__)
+
+
+def _request(parameters: dict[str, Any], components: dict[str, Any], seed: Any,
+             spawn_key: Any, version: Any) -> dict[str, Any]:
+    return {**{f"parameter {k}": v for k, v in parameters.items()},
+            **{f"component {k}": v for k, v in sorted(components.items())},
+            "seed": seed, "spawn key": spawn_key, "softcell version": version}
 
 
 def realization_rng(seed: int, point: int, realization: int) -> np.random.Generator:
@@ -80,10 +107,17 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
     Parameters
     ----------
     checkpoint : Path, optional
-        Where to save the state every ``checkpoint_every`` wall seconds, and to resume from if
-        a checkpoint with the same ``fingerprint`` exists.
+        Where to save the state every ``checkpoint_every`` wall seconds (and when
+        interrupted), and to resume from if a checkpoint made for the same ``fingerprint``
+        (the task's request, as JSON) exists; one made for another request is an error.
     progress : callable, optional
         Called with the simulated seconds advanced since its last call.
+
+    Raises
+    ------
+    Interrupted
+        On Ctrl-C (a ``KeyboardInterrupt``), after saving the checkpoint of the last
+        finished chunk; its message says where the run stopped.
     """
     times = sample_times(model.params)
     modes, pose, schedule = initial_state(model, rng)
@@ -92,38 +126,67 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
     rec_pose = np.empty((times.size, 3))
     first = 0
     if checkpoint is not None and checkpoint.exists():
-        saved = np.load(checkpoint, allow_pickle=False)
-        if str(saved["fingerprint"]) == fingerprint:
-            first = int(saved["next_sample"])
-            rec_modes[:first], rec_pose[:first] = saved["modes_record"], saved["pose_record"]
-            state = {k.removeprefix("state_"): saved[k].copy() for k in saved.files
-                     if k.startswith("state_")}
-            if progress:
-                progress(float(times[first - 1]))
+        saved = read_checkpoint(checkpoint)
+        if saved["request"] != fingerprint:
+            raise SoftcellError(f"checkpoint {checkpoint} was made for another request; "
+                                "remove it or rerun with --overwrite")
+        first = int(saved["next_sample"])
+        rec_modes[:first], rec_pose[:first] = saved["modes_record"], saved["pose_record"]
+        state = {k.removeprefix("state_"): v.copy() for k, v in saved.items()
+                 if k.startswith("state_")}
+        if progress:
+            progress(float(times[first - 1]))
     last_save = time.monotonic()
     if first == 0:
         check_state(state, model, label)
         rec_modes[0], rec_pose[0] = state["modes"], state["pose"]
         first = 1
-    for i in range(first, times.size, SAMPLES_PER_CALL):
-        j = min(i + SAMPLES_PER_CALL, times.size)
-        rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
-        check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
-        if progress:
-            progress(float(times[j - 1] - times[i - 1]))
-        if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
-            _save_checkpoint(checkpoint, fingerprint, j, rec_modes, rec_pose, state)
-            last_save = time.monotonic()
+    done, done_state = first, _copy_state(state)  # the last consistent point
+    try:
+        for i in range(first, times.size, SAMPLES_PER_CALL):
+            j = min(i + SAMPLES_PER_CALL, times.size)
+            rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
+            check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
+            done, done_state = j, _copy_state(state)
+            if progress:
+                progress(float(times[j - 1] - times[i - 1]))
+            if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
+                _save_checkpoint(checkpoint, fingerprint, j, rec_modes, rec_pose, state)
+                last_save = time.monotonic()
+    except KeyboardInterrupt:
+        # The stepper may have been stopped half way through a chunk: save what is whole.
+        if checkpoint is not None:
+            _save_checkpoint(checkpoint, fingerprint, done, rec_modes, rec_pose, done_state)
+        raise Interrupted(f"interrupted at t = {times[done - 1]:.2f} s of {label}"
+                          + ("; rerun the same command to resume" if checkpoint else "")
+                          ) from None
     return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
 
 
-def _save_checkpoint(path: Path, fingerprint: str, next_sample: int, rec_modes: np.ndarray,
+def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return {k: np.array(v, copy=True) for k, v in state.items()}
+
+
+def _save_checkpoint(path: Path, request: str, next_sample: int, rec_modes: np.ndarray,
                      rec_pose: np.ndarray, state: dict[str, np.ndarray]) -> None:
-    tmp = path.with_name(path.name + f".{os.getpid()}.tmp.npz")
-    np.savez(tmp, fingerprint=np.array(fingerprint), next_sample=np.array(next_sample),
-             modes_record=rec_modes[:next_sample], pose_record=rec_pose[:next_sample],
-             **{f"state_{k}": v for k, v in state.items()})
-    os.replace(tmp, path)
+    with atomic_write(path) as tmp:
+        np.savez(tmp, request=np.array(request), next_sample=np.array(next_sample),
+                 modes_record=rec_modes[:next_sample], pose_record=rec_pose[:next_sample],
+                 **{f"state_{k}": v for k, v in state.items()})
+
+
+def read_checkpoint(path: Path) -> dict[str, Any]:
+    """The arrays of a checkpoint, ``request`` as a str; a one-line error if unreadable."""
+    try:
+        with np.load(path, allow_pickle=False) as saved:
+            data = {k: saved[k] for k in saved.files}
+        data["request"] = str(data.get("request", ""))
+        int(data["next_sample"])
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise SoftcellError(f"checkpoint {path} is unreadable (truncated or corrupt: "
+                            f"{type(exc).__name__}); rerun with --overwrite to start that "
+                            "realization again") from None
+    return data
 
 
 def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
@@ -164,24 +227,22 @@ def _model_and_stepper(task: Task, extra_specs) -> tuple[Model, Stepper]:
 def run_task(task: Task, progress: Callable[[float], None] | None = None,
              checkpoint_every: float = CHECKPOINT_EVERY) -> str:
     """Run one (point, realization) and write its file atomically; returns the path."""
-    from softcell.core.registry import get_registry
+    from softcell.core.registry import PluginWarning, get_registry
     from softcell.io.netcdf import write_dataset
 
-    model, stepper = _model_and_stepper(task, get_registry().parameter_specs().values())
+    with warnings.catch_warnings():  # the command that planned the run has warned already
+        warnings.simplefilter("ignore", PluginWarning)
+        specs = get_registry().parameter_specs().values()
+    model, stepper = _model_and_stepper(task, specs)
     path = Path(task.path)
-    fingerprint = hashlib.sha256(json.dumps(
-        [task.values, task.components, task.seed, task.point, task.realization, task.membrane,
-         __version__], sort_keys=True).encode()).hexdigest()
-    checkpoint = path.with_name(f".{path.stem}.ckpt.npz")
+    checkpoint = checkpoint_path(path)
     record = run_realization(model, stepper, realization_rng(task.seed, task.point,
                                                              task.realization),
-                             label=task.name, checkpoint=checkpoint, fingerprint=fingerprint,
+                             label=task.name, checkpoint=checkpoint,
+                             fingerprint=_canonical(task.request(specs)),
                              checkpoint_every=checkpoint_every, progress=progress)
-    components = {**task.components, "membrane": task.membrane}
-    if not task.membrane:
-        components["energy_terms"] = []
     ds = record_dataset(record, model, realization=task.realization, seed=task.seed,
-                        components=components,
+                        components=task.stored_components,
                         extra_attrs={"softcell_point": task.point,
                                      "softcell_spawn_key": f"{task.point},{task.realization}"})
     write_dataset(ds, path)
@@ -191,13 +252,24 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
 
 def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
          membrane: bool = True) -> list[Task]:
-    """The tasks of an ensemble, one per (parameter point, realization), in order."""
+    """The tasks of an ensemble, one per (parameter point, realization), in order.
+
+    Everything is checked here, before anything is computed: the component names, every
+    parameter point (including what fits in memory, :func:`softcell.core.limits.check_run`),
+    the integrator's own conditions, the seed and the number of realizations.
+    """
     from softcell.core.registry import get_registry
 
+    if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
+        raise SoftcellError(f"realizations = {realizations!r} is not allowed: must be an "
+                            "integer >= 1")
+    check_seed(seed)
+    config.check_components()
     registry = get_registry()
     points = expand_sweep(config.parameters, list(registry.parameter_specs().values()))
     integrator = registry.get("integrator", config.components["integrator"])
     for _, params in points:
+        check_run(params)
         integrator.check(params)
     tasks = []
     for p, (_, params) in enumerate(points):
@@ -207,13 +279,154 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
     return tasks
 
 
+def checkpoint_path(path: Path) -> Path:
+    """The checkpoint of the realization whose file is ``path``."""
+    return path.with_name(f".{path.stem}.ckpt.npz")
+
+
+def _canonical(request: dict[str, Any]) -> str:
+    return json.dumps(request, sort_keys=True)
+
+
+def _shown(value: Any) -> str:
+    return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
+
+
+def first_mismatch(made: dict[str, Any], wanted: dict[str, Any]) -> str | None:
+    """``"radius = 4.0 there, 8.0 in this request"`` for the first setting (in the order of
+    ``wanted``) whose value differs, or None when every setting is equal."""
+    for key in [*wanted, *(k for k in made if k not in wanted)]:
+        there, here = made.get(key, "(none)"), wanted.get(key, "(none)")
+        if json.dumps(there, sort_keys=True) != json.dumps(here, sort_keys=True):
+            return f"{key} = {_shown(there)} there, {_shown(here)} in this request"
+    return None
+
+
+def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
+    """The settings a simulation file was made with, in the form of :meth:`Task.request`,
+    and its sample times (s).
+
+    Raises
+    ------
+    SoftcellError
+        If the file does not open or does not follow the schema.
+    """
+    from softcell.io.netcdf import open_dataset
+    from softcell.io.schema import problems
+
+    try:
+        ds = open_dataset(path)  # lazily: the membrane is not read
+    except SoftcellError:
+        raise SoftcellError("it is not a readable NetCDF file (truncated or corrupt)") from None
+    with ds:
+        found = problems(ds)
+        if found:
+            raise SoftcellError(f"it does not follow the simulation schema ({found[0]})")
+        a = ds.attrs
+        return _request(json.loads(a["softcell_parameters"]),
+                        json.loads(a["softcell_components"]), int(a["softcell_seed"]),
+                        str(a.get("softcell_spawn_key")), a.get("softcell_version")
+                        ), np.asarray(ds["time"].values)
+
+
+def _reuse_problem(path: Path, wanted: dict[str, Any], times: np.ndarray) -> str | None:
+    """Why the finished file ``path`` cannot stand for the request ``wanted``, or None."""
+    try:
+        made, stored = stored_request(path)
+    except SoftcellError as exc:
+        return f"cannot be reused: {exc}"
+    why = first_mismatch(made, wanted)
+    if why:
+        return f"was made with {why}"
+    if not np.array_equal(stored, times):
+        return f"is incomplete ({stored.size} samples, {times.size} expected)"
+    return None
+
+
+@dataclass
+class Resume:
+    """What an existing output directory holds for a request: tasks still to run, files to
+    remove first (``overwrite``), and how many finished files are reused."""
+
+    todo: list[Task]
+    remove: list[Path]
+    reused: int
+
+
+def _overwrite_hint(path: Path, why: str) -> SoftcellError:
+    return SoftcellError(f"{path} {why}; rerun with --overwrite to recompute it (and every "
+                         "other file that does not match), or write to another directory")
+
+
+def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Resume:
+    """Compare what ``out`` holds with the request ``tasks``, before anything runs.
+
+    A finished file is reused only when it is complete and was made with exactly the
+    request's settings (every parameter, the components, seed, spawn key, package version);
+    a checkpoint only when it was made for the same request. Anything else stops the run
+    with one line naming the first mismatching setting and both values, unless
+    ``overwrite``: then it is removed and recomputed. Simulation files in ``out`` that are
+    no part of the request (a larger sweep, more realizations) stop the run too, as they
+    would be read as part of the sweep; ``overwrite`` removes them.
+    """
+    from softcell.core.registry import get_registry
+    from softcell.io.files import kind_of
+
+    specs = list(get_registry().parameter_specs().values())
+    resume = Resume([], [], 0)
+    if not out.exists():
+        return Resume(list(tasks), [], 0)
+    for task in tasks:
+        path, checkpoint = Path(task.path), checkpoint_path(Path(task.path))
+        wanted = task.request(specs)
+        if path.exists():
+            why = _reuse_problem(path, wanted, sample_times(Parameters(task.values, specs)))
+            if why is None:
+                resume.reused += 1
+                continue
+            if not overwrite:
+                raise _overwrite_hint(path, why)
+            resume.remove.append(path)
+        if checkpoint.exists():
+            try:
+                made = json.loads(read_checkpoint(checkpoint)["request"] or "{}")
+                why = first_mismatch(made, wanted)
+                why = why and f"was made with {why}"
+            except (SoftcellError, ValueError):
+                why = "cannot be reused: it is truncated or corrupt"
+            if why is not None:
+                if not overwrite:
+                    raise _overwrite_hint(checkpoint, why)
+                resume.remove.append(checkpoint)
+        resume.todo.append(task)
+    planned = {Path(t.path).name for t in tasks}
+    stray = sorted(p for p in out.glob("*.nc") if p.name not in planned
+                   and not p.name.startswith(".") and kind_of(p) == "simulation")
+    if stray and not overwrite:
+        raise SoftcellError(f"{out} holds {len(stray)} simulation file(s) that are no part of "
+                            f"this request (e.g. {stray[0].name}), which would be read as part "
+                            "of the sweep; rerun with --overwrite to remove them, or write to "
+                            "another directory")
+    resume.remove.extend(stray)
+    return resume
+
+
+def expected_bytes(tasks: list[Task]) -> int:
+    """Disk space (bytes) the files of ``tasks`` will take, about."""
+    from softcell.core.registry import get_registry
+
+    specs = list(get_registry().parameter_specs().values())
+    return sum(file_bytes(Parameters(t.values, specs)) for t in tasks)
+
+
 def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: int = 1,
              seed: int = 0, workers: int = 1, scheduler: str | None = None,
              client: Any = None, membrane: bool = True, progress: bool = True,
-             checkpoint_every: float = CHECKPOINT_EVERY) -> list[Path]:
+             checkpoint_every: float = CHECKPOINT_EVERY, overwrite: bool = False) -> list[Path]:
     """Run an ensemble: every parameter point of ``config`` x ``realizations``.
 
-    Files already present in ``out`` are kept (finished realizations are skipped).
+    Finished files already in ``out`` are kept when they match the request exactly (see
+    :func:`resume_plan`); a mismatch stops the run before anything is computed.
 
     Parameters
     ----------
@@ -224,24 +437,44 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
         Address of a running dask.distributed scheduler (``tcp://host:8786``): one task per
         realization on its workers, which must be able to write to ``out``. Excludes
         ``workers``.
+    overwrite : bool
+        Recompute files and checkpoints in ``out`` that do not match the request, and remove
+        simulation files that are no part of it.
 
     Returns
     -------
     list of Path
         One NetCDF file per (point, realization), in task order. The bytes do not depend on
         ``workers`` or ``scheduler``.
+
+    Raises
+    ------
+    SoftcellError
+        For any bad request, before anything is computed or any directory created.
+    Interrupted
+        On Ctrl-C, once the running realizations' checkpoints are saved.
     """
     from tqdm.auto import tqdm
 
-    if workers < 1:
-        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
+    from softcell.io.files import check_output, check_writable, remove
+
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SoftcellError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
     if sum([scheduler is not None, workers != 1, client is not None]) > 1:
         raise SoftcellError(f"workers = {workers}, scheduler = {scheduler!r} and a client "
                             "exclude each other: give one")
-    out = Path(out).resolve()  # workers of a cluster have their own working directories
-    out.mkdir(parents=True, exist_ok=True)
+    if not (isinstance(checkpoint_every, int | float) and 0 <= checkpoint_every < math.inf):
+        raise SoftcellError(f"checkpoint_every = {checkpoint_every} s is not allowed: must be "
+                            "finite and >= 0 s (0: after every chunk of samples)")
+    out = check_output(out, "simulation", directory=True)  # absolute: cluster workers too
     tasks = plan(config, out, realizations=realizations, seed=seed, membrane=membrane)
-    todo = [t for t in tasks if not Path(t.path).exists()]
+    resume = resume_plan(tasks, out, overwrite=overwrite)
+    check_writable(out, expected_bytes(resume.todo))
+    if scheduler is not None:
+        check_scheduler(scheduler)
+    remove(resume.remove)
+    out.mkdir(parents=True, exist_ok=True)
+    todo = resume.todo
     total = sum(_duration(t) for t in todo)
     with tqdm(total=total, unit="sim s", disable=not progress or not todo, unit_scale=False,
               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} sim s "
@@ -273,6 +506,7 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
+        check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="30s")
         except OSError as exc:
@@ -282,8 +516,10 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
             yield client
         return
     logging.getLogger("distributed").setLevel(logging.ERROR)
+    # Workers log at ERROR only: a cancelled task (Ctrl-C) is no warning to the user.
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+            Client(cluster) as client:
         yield client
 
 
@@ -303,7 +539,65 @@ def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] 
             paths.append(future.result())
             if progress:
                 progress(_duration(futures[future]))
+    except KeyboardInterrupt:
+        client.cancel(list(futures))
+        running = [t for f, t in futures.items() if f.status != "finished"]
+        raise Interrupted(_where(running, len(futures) - len(running), len(futures))) from None
     except BaseException:
         client.cancel(list(futures))
         raise
     return paths
+
+
+def _where(unfinished: list[Task], finished: int, total: int) -> str:
+    """Where an interrupted cluster run stood, from the checkpoints of its unfinished tasks."""
+    saved = []
+    for task in unfinished:
+        checkpoint = checkpoint_path(Path(task.path))
+        try:
+            data = read_checkpoint(checkpoint) if checkpoint.exists() else None
+        except SoftcellError:
+            data = None
+        if data is not None:
+            last = int(data["next_sample"]) - 1
+            saved.append(f"t = {float(sample_times(Parameters(task.values, _specs()))[last]):.2f}"
+                         f" s of {task.name}")
+    where = ", ".join(saved) if saved else "t = 0 s of every unfinished realization"
+    return (f"interrupted at {where} ({finished} of {total} realizations finished); rerun the "
+            "same command to resume")
+
+
+def _specs() -> list[ParameterSpec]:
+    from softcell.core.registry import get_registry
+
+    return list(get_registry().parameter_specs().values())
+
+
+#: Address schemes of dask.distributed's communication back ends.
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "inproc", "ucx")
+
+
+def check_scheduler(address: str) -> None:
+    """Raise a one-line :class:`SoftcellError` unless ``address`` names a scheduler that
+    accepts a connection, at once (dask itself waits 30 s before it gives up)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(address)
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+        parts = None
+    if parts is None or parts.scheme not in SCHEDULER_SCHEMES or (
+            parts.scheme != "inproc" and (not host or port is None)):
+        raise SoftcellError(f"scheduler address {address!r} is not allowed: must be "
+                            "SCHEME://HOST:PORT with SCHEME one of "
+                            f"{', '.join(SCHEDULER_SCHEMES)} (e.g. tcp://10.0.0.5:8786)")
+    if parts.scheme == "inproc":
+        return
+    try:
+        socket.create_connection((host, port), timeout=5).close()
+    except OSError as exc:
+        raise SoftcellError(f"cannot reach the dask scheduler at {address!r}: "
+                            f"{exc.strerror or exc}") from None

@@ -33,3 +33,8 @@ class SchemaError(SoftcellError, ValueError):
 
 class RegistryError(SoftcellError):
     """Conflicting or malformed plugin components (e.g. two components with one name)."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a run, once what was done is saved; the message says where the run
+    stopped and how to resume it (CLI exit status 130, no traceback)."""

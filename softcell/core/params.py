@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from softcell.core.errors import ConfigError, ParameterError
+from softcell.core.limits import max_radius
 
 Value = float | int | str
 
@@ -108,8 +109,12 @@ class ParameterSpec:
         if self.kind is str:
             return  # a name (e.g. of a plugin): whoever looks it up names a bad one
         assert isinstance(value, int | float)
-        ok = math.isfinite(value)
-        if ok and self.minimum is not None:
+        if not math.isfinite(value):
+            rest = self.allowed().removeprefix("must be ")
+            raise ParameterError(self.name, value, "must be finite" if rest.startswith(
+                "any finite") else f"must be finite and {rest}", self.unit)
+        ok = True
+        if self.minimum is not None:
             ok = value >= self.minimum if self.minimum_inclusive else value > self.minimum
         if ok and self.maximum is not None:
             ok = value <= self.maximum if self.maximum_inclusive else value < self.maximum
@@ -179,6 +184,11 @@ def _cross_check(v: Mapping[str, Value]) -> None:
     if v["radius"] <= v["bot_semi_major"]:
         raise ParameterError("radius", v["radius"],
                              f"must be > bot_semi_major = {v['bot_semi_major']:g} cm", "cm")
+    if v["radius"] > max_radius(v["contact_length"]):
+        raise ParameterError("radius", v["radius"],
+                             f"must be <= {max_radius(v['contact_length']):.3g} cm: beyond it, "
+                             "float64 positions (relative rounding 2.2e-16) no longer resolve "
+                             f"the contact length lambda = {v['contact_length']:g} cm", "cm")
     if v["bot_semi_minor"] > v["bot_semi_major"]:
         raise ParameterError("bot_semi_minor", v["bot_semi_minor"],
                              f"must be <= bot_semi_major = {v['bot_semi_major']:g} cm", "cm")

@@ -5,7 +5,8 @@ entry point of the group ``softcell``, through pluggy, and collects the componen
 hooks return. A plugin that fails to import or to register is reported with a
 :class:`PluginWarning` naming its distribution and the error, and skipped. Two components of
 one kind with one name are an error naming both origins. ``SOFTCELL_DISABLE_PLUGINS=a,b``
-blocks plugins by name (entry-point names, or the short names of built-ins).
+blocks plugins by name: an entry-point name, a distribution name (as the skip warning shows
+it), or the short name of a built-in; a name that matches nothing is warned about.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import functools
 import importlib
 import importlib.metadata
 import os
+import re
 import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -78,26 +80,43 @@ class Registry:
         if disabled is None:
             disabled = [s.strip() for s in os.environ.get(DISABLE_ENV, "").split(",")]
         self.disabled = frozenset(d for d in disabled if d)
+        self._blocked: set[str] = set()  # the entries of ``disabled`` that matched a plugin
         self.skipped: list[tuple[str, str]] = []  # (plugin, reason)
+        self.skipped_origins: dict[str, str] = {}
         self.pm = pluggy.PluginManager(ENTRY_POINT_GROUP)
         self.pm.add_hookspecs(hookspecs)
         self._origins: dict[str, str] = {}
 
         for module_name in builtins:
             short = module_name.rsplit(".", 1)[-1]
-            if short not in self.disabled:
+            if not self._is_disabled(short, module_name):
                 self._register(short, importlib.import_module(module_name),
                                f"built-in ({module_name})")
         for name, plugin in extra_plugins:
-            if name not in self.disabled:
+            if not self._is_disabled(name):
                 self._register(name, plugin, f"registered object {name!r}")
         if entry_points is None:
             entry_points = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
         for ep in entry_points:
-            if ep.name not in self.disabled:
+            dist = getattr(ep, "dist", None)
+            if not self._is_disabled(ep.name, dist.name if dist else None):
                 self._load_entry_point(ep)
+        unmatched = sorted(d for d in self.disabled if _normal(d) not in self._blocked)
+        if unmatched:
+            warnings.warn(f"{DISABLE_ENV} names {', '.join(map(repr, unmatched))}, which "
+                          "match no plugin (give an entry-point name, a distribution name or "
+                          "a built-in's name, as `softcell plugins` shows them)",
+                          PluginWarning, stacklevel=2)
         self.pm.check_pending()
         self._components = self._collect()
+
+    def _is_disabled(self, *names: str | None) -> bool:
+        """Whether any of a plugin's names (entry point, distribution, module) is blocked;
+        distribution names compare as pip does (case, '-', '_' and '.' alike)."""
+        wanted = {_normal(d) for d in self.disabled}
+        hit = {_normal(n) for n in names if n} & wanted
+        self._blocked |= hit
+        return bool(hit)
 
     # -- loading ---------------------------------------------------------------------------
 
@@ -108,6 +127,7 @@ class Registry:
     def _skip(self, plugin: str, origin: str, error: BaseException | str) -> None:
         reason = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
         self.skipped.append((plugin, reason))
+        self.skipped_origins[plugin] = origin
         warnings.warn(f"softcell plugin {plugin!r} from {origin} was skipped: {reason}",
                       PluginWarning, stacklevel=3)
 
@@ -204,6 +224,10 @@ class Registry:
         except KeyError:
             raise ConfigError(f"no component kind {kind!r}; kinds: "
                               + ", ".join(KINDS.values())) from None
+
+
+def _normal(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
 
 
 _override: list[Registry] = []

@@ -57,6 +57,27 @@ class RunConfig:
                                    components={**self.components, **dict(components)},
                                    run={**self.run, **dict(run)})
 
+    def check_components(self) -> None:
+        """Raise :class:`ConfigError` unless every component named exists in the registry
+        (with a suggestion for a misspelt one) and no energy term is named twice."""
+        from softcell.core.registry import get_registry
+
+        registry = get_registry()
+        terms = self.components.get("energy_terms", [])
+        if isinstance(terms, str) or not isinstance(terms, list | tuple):
+            raise ConfigError(f"energy_terms = {terms!r} is not allowed: must be a list of "
+                              "names")
+        for name in terms:
+            if list(terms).count(name) > 1:
+                raise ConfigError(f"energy term {name!r} is named twice in energy_terms = "
+                                  f"{list(terms)}: each term counts once")
+            registry.get("energy_term", name)
+        for kind in ("driving_protocol", "integrator", "stopgo_detector"):
+            name = self.components.get(kind)
+            if not isinstance(name, str):
+                raise ConfigError(f"{kind} = {name!r} is not allowed: must be a name")
+            registry.get(kind, name)
+
     def extra_specs(self) -> list[ParameterSpec]:
         """Parameters declared by registered components (e.g. the detector's ``threshold``)."""
         from softcell.core.registry import get_registry

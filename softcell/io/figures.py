@@ -24,6 +24,7 @@ import numpy as np
 import xarray as xr
 
 from softcell.core.errors import SoftcellError
+from softcell.io.files import atomic_files
 
 #: Background colour of each regime (``regime`` flag value), as in the paper.
 REGIME_COLORS = {0: "#b39ddb", 1: "#f8bbd0", 2: "#a5d6a7"}
@@ -260,7 +261,8 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     i = analysis.sizes["radius"] - 1 if i is None else i
     _background(ax_a, _regime_at(analysis, i))
     _speed_series(ax_a, analysis, i, 30.0, bodies=("cell",), shade=True)
-    radii = [r for r in analysis["radius"].values if r >= 6]
+    # The paper's PDFs are of the decoupled radii; a sweep without any shows all it has.
+    radii = [r for r in analysis["radius"].values if r >= 6] or list(analysis["radius"].values)
     for col, kind in enumerate(("go", "stop")):
         ax = fig.add_subplot(grid[1, col])
         _label(ax, "b")
@@ -352,6 +354,47 @@ def _metadata(fmt: str, name: str) -> dict[str, str]:
             "svg": {"Creator": creator}}.get(fmt, {})
 
 
+#: Figures :func:`make_figures` may write, each in every format of :data:`FORMATS`.
+FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
+
+#: Variables each input of :func:`make_figures` must hold.
+NEEDS = {
+    "analysis": ("msd", "lag", "scaled_duration", "stop_pdf", "go_pdf", "mean_go_duration",
+                 "mean_stop_duration", "ballistic_velocity", "msd_slope", "v0_hat",
+                 "msd_slope_theory", "regime"),
+    "tracked": ("scaled_duration", "stop_pdf", "go_pdf", "mean_go_duration",
+                "mean_stop_duration", "ballistic_velocity", "msd_slope", "v0_hat",
+                "msd_slope_theory"),
+    "free_bot": ("msd", "lag"),
+}
+
+
+def check_inputs(analysis: xr.Dataset, *, simulations: xr.Dataset | None = None,
+                 free_bot: xr.Dataset | None = None, tracked: xr.Dataset | None = None) -> None:
+    """Raise a one-line :class:`SoftcellError` unless the inputs are what the figures read:
+    analyses (``softcell analyze``) holding the variables of :data:`NEEDS`, the analysis of a
+    radius sweep, and a simulation Dataset."""
+    for role, ds in (("analysis", analysis), ("free_bot", free_bot), ("tracked", tracked)):
+        if ds is None:
+            continue
+        origin = ds.attrs.get("softcell_origin")
+        missing = [v for v in NEEDS[role] if v not in ds.variables]
+        if origin != "analysis" or missing:
+            what = (f"lacks {', '.join(missing)}" if origin == "analysis"
+                    else f"is a {origin or 'non-softcell'} file, not an analysis")
+            raise SoftcellError(f"the {role.replace('_', ' ')} input {what}: give the output "
+                                "of `softcell analyze`"
+                                + (" on a tracked video" if role == "tracked" else ""))
+    if "radius" not in analysis.dims:
+        raise SoftcellError("the figures need the analysis of a radius sweep (a 'radius' "
+                            "dimension); this analysis has dims "
+                            f"{', '.join(analysis.dims) or 'none'}")
+    if simulations is not None:
+        from softcell.io.schema import validate
+
+        validate(simulations)
+
+
 def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
                  simulations: xr.Dataset | None = None, free_bot: xr.Dataset | None = None,
                  tracked: xr.Dataset | None = None,
@@ -376,12 +419,8 @@ def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
     FigureSet
         The files written per figure, and the figures left out with the reason.
     """
-    if "radius" not in analysis.dims:
-        raise SoftcellError("the figures need the analysis of a radius sweep (a 'radius' "
-                            "dimension); this analysis has dims "
-                            f"{', '.join(analysis.dims)}")
+    check_inputs(analysis, simulations=simulations, free_bot=free_bot, tracked=tracked)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     result = FigureSet()
     plans = {
         "fig2": (lambda: figure2(analysis, simulations), simulations is None,
@@ -393,17 +432,17 @@ def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
         "figS2": (lambda: figure_s2(analysis), False, ""),
         "figS3": (lambda: figure_s3(analysis), False, ""),
     }
-    for name, (draw, missing, why) in plans.items():
-        if missing:
-            result.skipped[name] = why
-            continue
-        fig = draw()
-        files = []
-        for fmt in formats:
-            path = out / f"{name}.{fmt}"
-            tmp = path.with_name(f".{path.stem}.tmp.{fmt}")
-            fig.savefig(tmp, dpi=150, metadata=_metadata(fmt, name))
-            os.replace(tmp, path)
-            files.append(path)
-        result.files[name] = files
+    with atomic_files() as staging:  # the whole set, or nothing (a full disk)
+        for name, (draw, missing, why) in plans.items():
+            if missing:
+                result.skipped[name] = why
+                continue
+            fig = draw()
+            files = []
+            for fmt in formats:
+                path = out / f"{name}.{fmt}"
+                fig.savefig(staging.path(path), format=fmt, dpi=150,
+                            metadata=_metadata(fmt, name))
+                files.append(path)
+            result.files[name] = files
     return result

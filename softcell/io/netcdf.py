@@ -1,8 +1,9 @@
 """NetCDF-4 input and output.
 
-Files are written to a hidden temporary name beside the target, flushed to disk and renamed
-when complete, so a crash never leaves a partial file under a final name. Reading never
-decodes ``time`` into dates or timedeltas: simulated time stays a float in seconds.
+Files are written through :func:`softcell.io.files.atomic_write` (a hidden temporary name,
+flushed and renamed when complete), so a crash never leaves a partial file under a final
+name. Reading never decodes ``time`` into dates or timedeltas: simulated time stays a float
+in seconds.
 :func:`open_dataset` opens one file, or a directory holding the files of one sweep (one file
 per parameter point and realization) as one Dataset with one dimension per swept parameter.
 """
@@ -21,6 +22,7 @@ import xarray as xr
 import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.core.errors import SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
+from softcell.io.files import atomic_write
 
 #: Keyword arguments that keep simulated time as plain seconds.
 DECODE = {"decode_times": False, "decode_timedelta": False}
@@ -35,11 +37,6 @@ def _encoding(ds: xr.Dataset, complevel: int) -> dict[str, dict[str, Any]]:
         if var.dtype.kind in "UO":  # CF: text as char arrays, not netCDF-4 vlen strings
             encoding[name] = {"dtype": "S1"}
     return encoding
-
-
-def temporary_path(path: Path) -> Path:
-    """The hidden name a file is written under before it is renamed to ``path``."""
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
 
 
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: int = 4) -> Path:
@@ -57,22 +54,31 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     Returns
     -------
     Path
-        ``path``, which exists only once the whole file is written.
+        ``path``, which exists only once the whole file is written and flushed.
+
+    Raises
+    ------
+    StorageError
+        For a full disk, a read-only file system or a missing permission (one line); nothing
+        is left under ``path`` nor beside it.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = temporary_path(path)
     ds = _to_cf(ds)
-    try:
+    with atomic_write(path) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4",
                      encoding=_encoding(ds, complevel))
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return path
+
+
+def _open(path: Path, chunks: Mapping[str, int] | None = None) -> xr.Dataset:
+    """``xr.open_dataset`` of one file, with a one-line error for what is no NetCDF file."""
+    if path.stat().st_size == 0:
+        raise SoftcellError(f"{path} is empty (0 bytes): not a NetCDF file")
+    try:
+        return xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
+    except (OSError, RuntimeError, ValueError, KeyError) as exc:
+        raise SoftcellError(f"cannot read {path}: not a NetCDF file, or truncated or corrupt "
+                            f"({type(exc).__name__}: {exc})") from None
 
 
 #: Attribute marking the label variable that stands in for a text dimension coordinate.
@@ -106,8 +112,12 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     path = Path(path)
     if not path.is_file():
         raise SoftcellError(f"no such file: {path}")
-    with xr.open_dataset(path, engine="netcdf4", **DECODE) as ds:
-        return _from_cf(ds.load())
+    with _open(path) as ds:
+        try:
+            return _from_cf(ds.load())
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise SoftcellError(f"cannot read {path}: truncated or corrupt "
+                                f"({type(exc).__name__}: {exc})") from None
 
 
 def open_dataset(path: str | os.PathLike[str], *, chunks: Mapping[str, int] | None = None
@@ -132,7 +142,7 @@ def open_dataset(path: str | os.PathLike[str], *, chunks: Mapping[str, int] | No
     """
     path = Path(path)
     if path.is_file():
-        return _from_cf(xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE))
+        return _from_cf(_open(path, chunks))
     if not path.is_dir():
         raise SoftcellError(f"no such file or directory: {path}")
     return _combine(_sweep_files(path), chunks)
@@ -150,7 +160,7 @@ def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.D
     are results, not records)."""
     parts, names = [], []
     for f in files:
-        ds = xr.open_dataset(f, engine="netcdf4", chunks=chunks, **DECODE)
+        ds = _open(f, chunks)
         if ds.attrs.get("softcell_origin") == "analysis":
             ds.close()
             continue

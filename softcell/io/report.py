@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from softcell._version import __version__
+from softcell.io.files import atomic_files
 
 REGIME_NAMES = {-1: "unknown", 0: "coupled", 1: "intermediate", 2: "decoupled"}
 
@@ -408,9 +409,8 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
     title = "softcell reproduction report"
     summary = json.dumps({"softcell_version": __version__, "design": design.name, "seed": seed,
                           "findings": [asdict(f) for f in rows]}, indent=1)
-    for path, text in ((md, _markdown(blocks)), (page, _html(blocks, title)),
-                       (out / "findings.json", summary)):
-        tmp = path.with_name(f".{path.name}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+    with atomic_files() as staging:
+        for path, text in ((md, _markdown(blocks)), (page, _html(blocks, title)),
+                           (out / "findings.json", summary)):
+            staging.path(path).write_text(text, encoding="utf-8")
     return md, page

@@ -11,9 +11,12 @@ directory::
     figures/                Fig. 2, 3, 4, S1, S2, S3 as PNG and PDF
     report.md, report.html  what ran, every figure, the paper's findings beside ours
     findings.json           the findings table, for scripts
+    reproduce.json          the design, seed and version the directory was made for
 
-Run again into the same directory, it keeps every finished realization (as ``softcell
-simulate`` does), so an interrupted run resumes where it stopped; the
+Run again into the same directory with the same design, seed and version (``reproduce.json``
+records them), it keeps every finished realization (as ``softcell simulate`` does), so an
+interrupted run resumes where it stopped; another design or seed stops before anything is
+computed (``overwrite`` recomputes). The
 analyses, the tracking, the figures and the report take seconds and are redone. Every
 random stream derives from the one ``seed``: realization r of radius index p draws from
 ``SeedSequence(seed, spawn_key=(p, r))``; the free bot's realization r uses the stream of
@@ -116,9 +119,51 @@ def _config(design: Design, radius: float | list[float] | None = None) -> RunCon
     return RunConfig(parameters=values).updated(components=design.components)
 
 
+#: The request a results directory was made for: design, seed, version (checked on a rerun).
+MANIFEST = "reproduce.json"
+
+
+def _flat(prefix: str, value: Any) -> dict[str, Any]:
+    if isinstance(value, dict):
+        return {k: v for key, item in value.items()
+                for k, v in _flat(f"{prefix}.{key}" if prefix else key, item).items()}
+    return {prefix: value}
+
+
+def _manifest(design: Design, seed: int) -> dict[str, Any]:
+    from softcell._version import __version__
+
+    return json.loads(json.dumps({"design": asdict(design), "seed": seed,
+                                  "softcell_version": __version__}))
+
+
+def check_results_directory(out: Path, design: Design, seed: int, overwrite: bool) -> None:
+    """Stop, in one line, unless ``out`` is new or empty, or holds a reproduction of the same
+    design, seed and version (``overwrite`` lifts both)."""
+    from softcell.core.ensemble import first_mismatch
+
+    if overwrite or not out.is_dir() or not any(out.iterdir()):
+        return
+    manifest = out / MANIFEST
+    if not manifest.is_file():
+        raise SoftcellError(f"{out} is not empty and was not made by `softcell reproduce` (no "
+                            f"{MANIFEST}); choose a new directory, or pass --overwrite to "
+                            "write into it")
+    try:
+        made = json.loads(manifest.read_text())
+    except (OSError, ValueError) as exc:
+        raise SoftcellError(f"{manifest} is unreadable ({exc}); pass --overwrite to redo the "
+                            "reproduction") from None
+    why = first_mismatch(_flat("", made), _flat("", _manifest(design, seed)))
+    if why:
+        raise SoftcellError(f"{out} holds a reproduction made with {why}; rerun with "
+                            "--overwrite to recompute it, or write to another directory")
+
+
 def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int = 0,
               workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, log: Callable[[str], None] | None = print) -> Outcome:
+              overwrite: bool = False, progress: bool = True,
+              log: Callable[[str], None] | None = print) -> Outcome:
     """Run ``design`` into ``out``: simulations, analyses, the video pipeline, figures, report.
 
     Parameters
@@ -133,6 +178,10 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         Local worker processes for the simulations (default: every core).
     scheduler : str, optional
         Address of a dask.distributed scheduler to run the realizations on instead.
+    overwrite : bool
+        Recompute what ``out`` holds from another design, seed or version (without it such
+        a directory stops the run before anything is computed), or write into a non-empty
+        directory that ``softcell reproduce`` did not make.
     progress : bool
         Progress bars.
     log : callable, optional
@@ -144,8 +193,17 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         Paths and step timings; the report is ``out / "report.md"`` (and ``report.html``).
     """
     from softcell.core.analysis import analyze
-    from softcell.core.ensemble import cluster_client, simulate
+    from softcell.core.ensemble import (
+        check_scheduler,
+        cluster_client,
+        expected_bytes,
+        plan,
+        resume_plan,
+        simulate,
+    )
+    from softcell.core.limits import check_seed
     from softcell.io.figures import make_figures
+    from softcell.io.files import atomic_write, check_output, check_writable
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.io.report import write_report
 
@@ -160,8 +218,24 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     if scheduler is None and workers is None:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else os.cpu_count() or 1
-    out = Path(out).resolve()
+    check_seed(seed)
+    out = check_output(out, "report", directory=True)
+    check_results_directory(out, design, seed, overwrite)
+    config = _config(design)
+    free = _config(design, design.radii[0])
+    # Every check before anything is computed: both ensembles' requests against the files.
+    need = 0
+    for cfg, folder, count, membrane in (
+            (config, "simulations", design.realizations, True),
+            (free, "free_bot", design.free_bot_realizations, False)):
+        tasks = plan(cfg, out / folder, realizations=count, seed=seed, membrane=membrane)
+        need += expected_bytes(resume_plan(tasks, out / folder, overwrite=overwrite).todo)
+    check_writable(out, need)
+    if scheduler is not None:
+        check_scheduler(scheduler)
     out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / MANIFEST) as tmp:
+        tmp.write_text(json.dumps(_manifest(design, seed), indent=1), encoding="utf-8")
     outcome = Outcome(out, design, seed)
     say = log or (lambda _: None)
     options = {"discard": design.discard}
@@ -169,19 +243,17 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     def step(name: str, what: str):
         say(f"[{len(outcome.steps) + 1}/7] {what}")
         return _Timer(outcome.steps, name)
-
-    config = _config(design)
-    free = _config(design, design.radii[0])
     with contextlib.ExitStack() as stack:
         # One cluster for both ensembles: each worker compiles its steppers once.
         client = None if workers == 1 else stack.enter_context(
             cluster_client(workers or 1, scheduler))
         with step("simulations", f"simulating {design.describe()}"):
             simulate(config, out / "simulations", realizations=design.realizations, seed=seed,
-                     client=client, progress=progress)
+                     client=client, progress=progress, overwrite=overwrite)
         with step("free_bot", "simulating the free bot"):
             simulate(free, out / "free_bot", realizations=design.free_bot_realizations,
-                     seed=seed, client=client, membrane=False, progress=progress)
+                     seed=seed, client=client, membrane=False, progress=progress,
+                     overwrite=overwrite)
     with step("analysis", "analysing the sweep and the free bot"):
         # One dask chunk per file: the analysis holds one radius in memory at a time.
         analysis = analyze(open_dataset(out / "simulations", chunks={}), options,

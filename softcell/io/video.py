@@ -32,6 +32,7 @@ import xarray as xr
 from softcell._version import __version__
 from softcell.core.analysis.series import polygon_area_perimeter_centroid
 from softcell.core.errors import SoftcellError
+from softcell.io.files import StorageError, atomic_write, storage_problem
 
 SHIFT = 4  # fixed-point bits of OpenCV drawing coordinates: 1/16 px
 SUB = 1 << SHIFT
@@ -41,6 +42,15 @@ BOT = (35, 35, 35)
 MARK = (225, 225, 225)
 #: Points of the band's edges and midline before the membrane is resampled to its nodes.
 MIDLINE_POINTS = 1024
+#: Frames between two looks at the free disk space while rendering.
+DISK_CHECK_EVERY = 10
+#: Largest frame side (px) rendered: beyond it a frame no longer fits a codec's limits (and
+#: one 16384 x 16384 BGR frame is 768 MiB in float64 while drawn).
+MAX_FRAME_SIDE = 16384
+#: Smallest frame side (px): the codecs need a few macroblocks.
+MIN_FRAME_SIDE = 16
+#: Most membrane points a tracked contour is resampled to.
+MAX_TRACKED_NODES = 4096
 #: tracking_flag values and meanings.
 FLAGS = {"ok": 0, "membrane_lost": 1, "bot_lost": 2, "both_lost": 3}
 
@@ -144,18 +154,30 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
     -------
     RenderInfo
     """
-    for name, value in (("px_per_cm", px_per_cm), ("fps", fps), ("band_width", band_width)):
-        if not value > 0:
-            raise SoftcellError(f"{name} = {value} is not allowed: must be > 0")
-    for name, value in (("noise", noise), ("blur", blur), ("illumination", illumination)):
-        if not value >= 0:
-            raise SoftcellError(f"{name} = {value} is not allowed: must be >= 0")
+    from softcell.io.schema import validate
+
+    for name, value, unit in (("px_per_cm", px_per_cm, "px/cm"), ("fps", fps, "1/s"),
+                              ("band_width", band_width, "cm")):
+        if not (np.isfinite(value) and value > 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
+                                f"{unit}")
+    for name, value, unit in (("noise", noise, "grey levels"), ("blur", blur, "px"),
+                              ("illumination", illumination, "1")):
+        if not (np.isfinite(value) and value >= 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 "
+                                f"{unit}")
     path = Path(path)
     fourcc = cv2.VideoWriter_fourcc(*_codec(path))
+    validate(ds)
     for dim, index in {**(point or {}), "realization": realization}.items():
         if dim not in ds.sizes or not 0 <= index < ds.sizes[dim]:
             allowed = f"0 .. {ds.sizes[dim] - 1}" if dim in ds.sizes else "not a dimension"
             raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
+    for dim in ds["bot_x"].dims[:-2]:
+        if dim not in (point or {}):
+            raise SoftcellError(f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
+                                f"one with point {dim}=INDEX (0 .. {ds.sizes[dim] - 1}; "
+                                f"--point on the command line)")
     sel = ds.isel(point or {}).isel(realization=realization)
     if not np.isfinite(np.asarray(sel["membrane_x"].values)).any():
         raise SoftcellError("this realization has no membrane (a free bot): nothing to render")
@@ -195,35 +217,73 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
         cx, cy = float(np.mean(mx[0])), float(np.mean(my[0]))
         frame = Frame(px_per_cm, width, height, cx - width / (2 * px_per_cm),
                       cy - height / (2 * px_per_cm))
+    _check_frame_size(frame)
     rng = np.random.default_rng(seed)
     background = _background(frame, illumination)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    writer = cv2.VideoWriter(str(tmp), fourcc, fps, (frame.width, frame.height))
-    if not writer.isOpened():
-        raise SoftcellError(f"cannot open {path} for writing with codec {_codec(path)}")
     from tqdm.auto import tqdm
 
-    try:
-        for t in tqdm(times, disable=not progress, desc="render", unit="frame"):
-            k = int(np.clip(np.searchsorted(time_valid, t, side="right") - 1, 0,
-                            time_valid.size - 2))
-            w = (t - time_valid[k]) / (time_valid[k + 1] - time_valid[k])
-            state = {name: (1 - w) * arr[k] + w * arr[k + 1]
-                     for name, arr in (("mx", mx), ("my", my), ("bx", bx), ("by", by),
-                                       ("angle", angle))}
-            image = _draw(frame, background, state, a, b, band_width, head_mark)
-            if blur > 0:
-                image = cv2.GaussianBlur(image, (0, 0), blur)
-            if noise > 0:
-                image = image + rng.normal(0.0, noise, image.shape)
-            writer.write(np.clip(np.rint(image), 0, 255).astype(np.uint8))
-    except BaseException:
-        writer.release()
-        tmp.unlink(missing_ok=True)
-        raise
-    writer.release()
-    os.replace(tmp, path)
+    frame_bytes = DISK_CHECK_EVERY * 3 * frame.width * frame.height  # uncompressed, at most
+    with atomic_write(path) as tmp:
+        writer = cv2.VideoWriter(str(tmp), fourcc, fps, (frame.width, frame.height))
+        if not writer.isOpened():
+            raise SoftcellError(f"cannot open {path} for writing with codec {_codec(path)}")
+        try:
+            for index, t in enumerate(tqdm(times, disable=not progress, desc="render",
+                                           unit="frame")):
+                k = int(np.clip(np.searchsorted(time_valid, t, side="right") - 1, 0,
+                                time_valid.size - 2))
+                w = (t - time_valid[k]) / (time_valid[k + 1] - time_valid[k])
+                state = {name: (1 - w) * arr[k] + w * arr[k + 1]
+                         for name, arr in (("mx", mx), ("my", my), ("bx", bx), ("by", by),
+                                           ("angle", angle))}
+                image = _draw(frame, background, state, a, b, band_width, head_mark)
+                if blur > 0:
+                    image = cv2.GaussianBlur(image, (0, 0), blur)
+                if noise > 0:
+                    image = image + rng.normal(0.0, noise, image.shape)
+                writer.write(np.clip(np.rint(image), 0, 255).astype(np.uint8))
+                if index and index % DISK_CHECK_EVERY == 0:
+                    # OpenCV's writer reports no failed write: watch the disk instead.
+                    problem = storage_problem(tmp, need=frame_bytes)
+                    if problem:
+                        raise StorageError(f"cannot write {path}: {problem} (after {index} "
+                                           f"of {times.size} frames)")
+        finally:
+            writer.release()
+        written = count_frames(tmp)
+        if written != times.size:
+            problem = storage_problem(tmp) or "the file is incomplete"
+            raise StorageError(f"cannot write {path}: {problem} ({written} of {times.size} "
+                               "frames read back)")
     return RenderInfo(path, times, frame, not on_grid, coarse, notes)
+
+
+def _check_frame_size(frame: Frame) -> None:
+    for side, value in (("width", frame.width), ("height", frame.height)):
+        if not MIN_FRAME_SIDE <= value <= MAX_FRAME_SIDE:
+            raise SoftcellError(f"frame {side} = {value} px is not allowed: must be between "
+                                f"{MIN_FRAME_SIDE} and {MAX_FRAME_SIDE} px (scale "
+                                f"{frame.px_per_cm:g} px/cm; lower --px-per-cm or set --size)")
+
+
+def count_frames(path: str | os.PathLike[str]) -> int:
+    """Frames a finished video file holds, read back: the container's count, trusted only if
+    its last frame can be seeked to and decoded and nothing follows it (0 for a file that
+    does not open)."""
+    capture = cv2.VideoCapture(str(path))
+    try:
+        if not capture.isOpened():
+            return 0
+        stated = capture.get(cv2.CAP_PROP_FRAME_COUNT)
+        if not (np.isfinite(stated) and 0 < stated < 2**31):
+            return 0
+        stated = int(round(stated))
+        capture.set(cv2.CAP_PROP_POS_FRAMES, stated - 1)
+        if not capture.read()[0] or int(capture.get(cv2.CAP_PROP_POS_FRAMES)) != stated:
+            return 0
+        return stated if not capture.grab() else stated + 1
+    finally:
+        capture.release()
 
 
 def _background(frame: Frame, illumination: float) -> np.ndarray:
@@ -531,8 +591,19 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     from softcell.io.schema import COORDINATES, VARIABLES, global_attrs, validate
 
     video = Path(video)
-    if nodes < 3:
-        raise SoftcellError(f"nodes = {nodes} is not allowed: must be >= 3")
+    if nodes < 3 or nodes > MAX_TRACKED_NODES:
+        raise SoftcellError(f"nodes = {nodes} is not allowed: must be an integer between 3 "
+                            f"and {MAX_TRACKED_NODES}")
+    for name, value, unit in (("px_per_cm", px_per_cm, "px/cm"), ("arena_size", arena_size, "cm"),
+                              ("fps", fps, "1/s"), ("radius", radius, "cm")):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
+                                f"{unit}")
+    if px_per_cm is not None and arena_size is not None:
+        raise SoftcellError("px_per_cm and arena_size both set the scale: give one")
+    if len(origin) != 2 or not np.isfinite(origin).all():
+        raise SoftcellError(f"origin = {tuple(origin)} is not allowed: must be two finite "
+                            "coordinates X,Y in cm")
     if not video.is_file():
         raise SoftcellError(f"no such video file: {video}")
     if video.stat().st_size == 0:
@@ -544,7 +615,7 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
         width = int(capture.get(cv2.CAP_PROP_FRAME_WIDTH))
         height = int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT))
         rate = float(fps or capture.get(cv2.CAP_PROP_FPS) or 0.0)
-        if not rate > 0:
+        if not (np.isfinite(rate) and rate > 0):
             raise SoftcellError(f"video file {video} states no frame rate: pass fps")
         if px_per_cm is None:
             if arena_size is None:
@@ -574,6 +645,9 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
         capture.release()
     if not result.times:
         raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
+    if all(f == FLAGS["both_lost"] for f in result.flags):
+        raise SoftcellError(f"no frame of {video} was tracked: no red ring found in any of its "
+                            f"{len(result.flags)} frames")
     cell = np.array(result.cell)
     bot = np.array(result.bot)
     _orient_by_motion(bot, np.array(result.marked))

@@ -1,0 +1,121 @@
+"""What a run may ask for: limits set by this machine's memory and by float64.
+
+:func:`check_run` is called on every parameter point before anything is computed: a request
+that cannot fit (``duration = 1e12`` s records 1e13 samples; ``nodes = 2**30`` needs
+hundreds of GiB per realization) is refused with the parameter, its value, the largest value
+that fits and why, rather than crashing after minutes. :func:`check_seed` bounds the root seed
+by what a file can store.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from softcell.core.errors import ParameterError, SoftcellError
+
+#: A realization may use at most this fraction of the machine's memory (the rest is for the
+#: other worker, the analysis and the system).
+MEMORY_FRACTION = 0.5
+#: Bytes held per recorded sample beyond the stored membrane: the complex modes, the pose,
+#: times, phases and the Dataset's other variables, with copies made while writing.
+SAMPLE_OVERHEAD = 3
+#: Bytes per membrane collocation point held by an integrator (about 60 float64/complex128
+#: work arrays of length N: the curve, its derivatives, forces and FFT buffers).
+BYTES_PER_NODE = 1024
+#: Largest root seed: the seed is stored as an unsigned 64-bit attribute.
+MAX_SEED = 2**64 - 1
+#: Positions of size R carry a rounding error R * eps; the contact length lambda must stay
+#: this many times larger (otherwise the contact force is evaluated from rounding noise).
+CONTACT_RESOLUTION = 1e4
+
+
+def machine_memory() -> int:
+    """Physical memory of this machine (bytes)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return 8 << 30
+
+
+def _human(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} B"  # pragma: no cover
+
+
+def sample_count(params) -> int:
+    """Samples of one realization's record (the grid of ``engine.sample_times``), without
+    building it."""
+    duration, early = float(params.duration), float(params.sample_every)
+    late, switch = float(params.sample_every_late), float(params.sample_switch)
+    n = math.floor(min(switch, duration) / early * (1 + 1e-12)) + 1
+    if switch < duration:
+        n = math.ceil(switch / early) + math.floor((duration - switch) / late * (1 + 1e-12)) + 1
+    return int(n)
+
+
+def sample_bytes(params) -> int:
+    """Bytes of one stored sample in a simulation file (float64 membrane points, centre,
+    bot pose and phase), before compression, which gains little on these data."""
+    return 8 * (2 * int(params.stored_nodes) + 6) + 1
+
+
+def file_bytes(params) -> int:
+    """Expected size (bytes) of one realization's simulation file."""
+    return sample_count(params) * sample_bytes(params) + 64 * 1024
+
+
+def realization_bytes(params) -> dict[str, float]:
+    """Memory (bytes) one realization needs, by the parameter that drives each part."""
+    cutoff = int(params.cutoff)
+    unknowns = 2 * (2 * cutoff + 1) + 3
+    per_sample = 16 * (2 * cutoff + 1) + 40 + SAMPLE_OVERHEAD * sample_bytes(params)
+    phases = float(params.duration) / float(params.phase_min) + 2
+    return {"nodes": float(params.nodes) * BYTES_PER_NODE,
+            "cutoff": 8.0 * unknowns**2 * 8,  # rodas4's Jacobian, LU and stage matrices
+            "duration": sample_count(params) * per_sample + 17 * phases}
+
+
+def check_run(params, memory: int | None = None) -> None:
+    """Raise :class:`ParameterError` unless one realization of ``params`` fits in memory.
+
+    The message names the parameter whose share dominates, the largest value of it that
+    fits with the others unchanged, and the memory involved.
+    """
+    memory = machine_memory() if memory is None else memory
+    budget = MEMORY_FRACTION * memory
+    parts = realization_bytes(params)
+    total = sum(parts.values())
+    if total <= budget:
+        return
+    name = max(parts, key=parts.get)
+    spec = params.specs[name]
+    value = float(params[name])
+    room = budget - (total - parts[name])
+    if name == "duration":
+        largest = value * max(room, 0.0) / parts[name]
+    elif name == "cutoff":
+        largest = value * math.sqrt(max(room, 0.0) / parts[name])
+    else:
+        largest = 2 ** math.floor(math.log2(max(room / BYTES_PER_NODE, 1.0)))
+    unit = "" if spec.unit == "1" else f" {spec.unit}"
+    shown = f"{int(largest)}" if spec.kind is int else f"{largest:.3g}"
+    raise ParameterError(name, params[name], f"must be <= {shown}{unit}: one realization "
+                         f"would need {_human(total)} of memory, more than "
+                         f"{MEMORY_FRACTION:.0%} of this machine's {_human(memory)}", spec.unit)
+
+
+def max_radius(contact_length: float) -> float:
+    """Largest radius (cm) at which float64 positions resolve the contact length."""
+    return contact_length / (CONTACT_RESOLUTION * 2.0**-52)
+
+
+def check_seed(seed: object) -> int:
+    """The root seed as an int in 0 .. 2**64 - 1, or a one-line error."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise SoftcellError(f"seed = {seed!r} is not allowed: must be an integer between 0 and "
+                            f"2**64 - 1 = {MAX_SEED} (it is stored in every file)")
+    return seed

@@ -1,0 +1,308 @@
+"""Files, safely: one atomic-write helper for every writer, and one rule for every output.
+
+Every file softcell writes (NetCDF, video, figures, report, checkpoints) goes through
+:func:`atomic_write` or :func:`atomic_files`: it is written under a hidden temporary name that
+is unique to the process, flushed to disk, checked, and only then renamed to its final name; on
+any failure the temporary file is removed and the final name keeps what it had. A full disk, a
+read-only file system or a missing permission is reported as such, in one line
+(:class:`StorageError`).
+
+:func:`check_output` is the one rule of every verb's ``-o``: an output never replaces one of
+the inputs (the same file, or a file inside an input directory), never replaces a file that is
+not a softcell output of the same kind unless ``overwrite`` is given, and its directory must be
+writable, all checked before anything is computed.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import secrets
+import shutil
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager, suppress
+from pathlib import Path
+
+from softcell.core.errors import SoftcellError
+
+#: The kinds of output, and how an existing file of that kind is recognised.
+KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report")
+
+#: Below this many free bytes a failed write is taken to be a full disk.
+FULL_DISK_BYTES = 1 << 20
+
+
+class StorageError(SoftcellError):
+    """A file could not be written: full disk, read-only file system, no permission."""
+
+
+def temporary_path(path: str | os.PathLike[str]) -> Path:
+    """A hidden name beside ``path``, unique to this process and call, keeping the suffix
+    (``.name.<pid>-<token>.tmp.nc``): writers that infer the format from it still can, and
+    sweep readers skip it (hidden)."""
+    path = Path(path)
+    return path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(3)}.tmp{path.suffix}")
+
+
+def _existing_ancestor(path: Path) -> Path:
+    path = Path(os.path.abspath(path))
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def free_bytes(path: str | os.PathLike[str]) -> int:
+    """Bytes available to this user on the file system that holds (or would hold) ``path``."""
+    st = os.statvfs(_existing_ancestor(Path(path)))
+    return st.f_bavail * st.f_frsize
+
+
+def _read_only(path: Path) -> bool:
+    return bool(os.statvfs(_existing_ancestor(path)).f_flag & os.ST_RDONLY)
+
+
+def _human(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if abs(n) < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n} B"  # pragma: no cover
+
+
+def storage_problem(path: str | os.PathLike[str], exc: BaseException | None = None,
+                    need: int = FULL_DISK_BYTES) -> str | None:
+    """Why writing ``path`` failed, if the file system says: ``"no space left on device"``,
+    ``"read-only file system"``, ``"permission denied"``, or None.
+
+    Libraries that lose the ``errno`` (netCDF's "HDF error", OpenCV's silent writer) are
+    diagnosed from the file system itself: read-only flag, free space below ``need`` bytes
+    (1 MiB by default).
+    """
+    path = Path(path)
+    code = getattr(exc, "errno", None)
+    if code in (errno.ENOSPC, errno.EDQUOT):
+        return "no space left on device"
+    if code == errno.EROFS:
+        return "read-only file system"
+    if code in (errno.EACCES, errno.EPERM):
+        return "permission denied"
+    try:
+        if _read_only(path):
+            return "read-only file system"
+        if free_bytes(path) < need:
+            return "no space left on device"
+    except OSError:
+        return None
+    return None
+
+
+def _error(path: Path, problem: str) -> StorageError:
+    where = _existing_ancestor(path.parent)
+    return StorageError(f"cannot write {path}: {problem} ({_human(free_bytes(where))} free "
+                        f"in {where})" if problem == "no space left on device"
+                        else f"cannot write {path}: {problem}")
+
+
+def _fsync_directory(directory: Path) -> None:
+    with suppress(OSError):  # not every file system lets a directory be opened
+        fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _commit(tmp: Path, path: Path) -> None:
+    with open(tmp, "rb+") as fh:
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    _fsync_directory(path.parent)
+
+
+@contextmanager
+def atomic_files(*, makedirs: bool = True) -> Iterator[_Staging]:
+    """Write several files all or nothing.
+
+    ``staging.path(final)`` gives the temporary name to write ``final`` under; when the block
+    ends without an error, every staged file is flushed and renamed to its final name. On any
+    error (including a full disk) every temporary file is removed, no final name changes, and
+    a :class:`StorageError` says why when the file system is the cause.
+    """
+    staging = _Staging(makedirs)
+    try:
+        yield staging
+        for tmp, path in staging.files:
+            if not tmp.exists():
+                raise SoftcellError(f"internal error: {path} was staged but not written")
+            with open(tmp, "rb+") as fh:
+                os.fsync(fh.fileno())
+        for tmp, path in staging.files:
+            os.replace(tmp, path)
+        for directory in {p.parent for _, p in staging.files}:
+            _fsync_directory(directory)
+    except BaseException as exc:
+        for tmp, _ in staging.files:
+            with suppress(OSError):
+                tmp.unlink(missing_ok=True)
+        for directory in reversed(staging.created):
+            with suppress(OSError):
+                directory.rmdir()  # only if still empty
+        if isinstance(exc, StorageError | KeyboardInterrupt):
+            raise
+        for _, path in staging.files:
+            problem = storage_problem(path, exc)
+            if problem:
+                raise _error(path, problem) from None
+        raise
+
+
+class _Staging:
+    def __init__(self, makedirs: bool) -> None:
+        self.files: list[tuple[Path, Path]] = []
+        self.created: list[Path] = []  # directories made here, removed again on failure
+        self.makedirs = makedirs
+
+    def path(self, final: str | os.PathLike[str]) -> Path:
+        final = Path(final)
+        if self.makedirs:
+            missing = [p for p in (final.parent, *final.parent.parents) if not p.exists()]
+            self.created.extend(reversed(missing))
+            try:
+                final.parent.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise _error(final, storage_problem(final, exc) or str(exc)) from None
+        tmp = temporary_path(final)
+        self.files.append((tmp, final))
+        return tmp
+
+
+@contextmanager
+def atomic_write(path: str | os.PathLike[str], *, makedirs: bool = True) -> Iterator[Path]:
+    """Write one file atomically: the block writes the yielded temporary path, which becomes
+    ``path`` once the block ends without an error (see :func:`atomic_files`)."""
+    with atomic_files(makedirs=makedirs) as staging:
+        yield staging.path(path)
+
+
+# -- the rule of every output ---------------------------------------------------------------
+
+
+def kind_of(path: str | os.PathLike[str]) -> str | None:
+    """The kind of softcell output an existing file is (one of :data:`KINDS`), or None when
+    it is not recognisably one (videos carry no mark, so they are always None)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".nc":
+            import netCDF4
+
+            with netCDF4.Dataset(path) as nc:
+                origin = getattr(nc, "softcell_origin", None)
+            return origin if origin in ("simulation", "tracking", "analysis") else None
+        if suffix in (".png", ".pdf", ".svg"):
+            size = path.stat().st_size
+            with open(path, "rb") as fh:
+                head = fh.read(1 << 16)
+                fh.seek(max(size - (1 << 16), 0))
+                tail = fh.read()
+            return "figure" if b"softcell " in head or b"softcell " in tail else None
+        if suffix in (".md", ".html", ".json"):
+            with open(path, "rb") as fh:
+                head = fh.read(4096)
+            marks = (b"softcell reproduction report", b'"softcell_version"')
+            return "report" if any(m in head for m in marks) else None
+    except (OSError, RuntimeError, ValueError):
+        return None
+    return None
+
+
+def _inside(path: Path, directory: Path) -> bool:
+    try:
+        path.relative_to(directory)
+    except ValueError:
+        return False
+    return True
+
+
+def check_output(path: str | os.PathLike[str], kind: str, *,
+                 inputs: Iterable[str | os.PathLike[str]] = (), overwrite: bool = False,
+                 directory: bool = False, option: str = "-o") -> Path:
+    """Check, before anything is computed, that ``path`` may receive an output of ``kind``.
+
+    Parameters
+    ----------
+    path : path-like
+        The output: a file, or with ``directory`` a folder of outputs.
+    kind : str
+        One of :data:`KINDS`: an existing file is replaced only if it is a softcell output of
+        this kind (a rerun), or with ``overwrite``.
+    inputs : paths
+        The command's inputs (files or sweep directories); the output may never be one of
+        them, nor lie inside an input directory, nor (for a directory output) contain one.
+    overwrite : bool
+        Replace an existing file that is not a softcell output of ``kind``.
+
+    Returns
+    -------
+    Path
+        ``path``, absolute.
+
+    Raises
+    ------
+    SoftcellError
+        One line naming the output, the problem and the way out.
+    """
+    path = Path(os.path.abspath(path))
+    for source in inputs:
+        source = Path(os.path.abspath(source))
+        if not source.exists():
+            continue
+        if path.exists() and os.path.samefile(path, source):
+            raise SoftcellError(f"{option} {path} is the input {source}: an output never "
+                                "replaces an input; choose another name")
+        if source.is_dir() and _inside(path, source.resolve()):
+            raise SoftcellError(f"{option} {path} is inside the input directory {source}: an "
+                                "output there would be read as part of it; write it elsewhere")
+        if directory and source.is_file() and _inside(source.resolve(), path.resolve()):
+            raise SoftcellError(f"{option} {path} holds the input {source}: write the outputs "
+                                "to another directory")
+    if directory:
+        if path.exists() and not path.is_dir():
+            raise SoftcellError(f"{option} {path} is an existing file, not a directory")
+    elif path.is_dir():
+        raise SoftcellError(f"{option} {path} is a directory; give a file name "
+                            f"(e.g. {path / ('out.mkv' if kind == 'video' else 'out.nc')})")
+    elif path.exists() and not overwrite:
+        found = kind_of(path)
+        if found != kind:
+            what = f"a softcell {found} file" if found else "not a softcell " + kind + " file"
+            raise SoftcellError(f"{option} {path} exists and is {what}; pass --overwrite to "
+                                "replace it")
+    check_writable(path if directory else path.parent)
+    return path
+
+
+def check_writable(directory: str | os.PathLike[str], need: int = 0) -> None:
+    """Raise :class:`StorageError` unless files can be created in ``directory`` (or, when it
+    does not exist yet, in its nearest existing ancestor) with ``need`` bytes free."""
+    directory = Path(os.path.abspath(directory))
+    base = _existing_ancestor(directory)
+    if not base.is_dir():
+        raise SoftcellError(f"cannot create directory {directory}: {base} is a file")
+    if _read_only(base):
+        raise StorageError(f"cannot write to {directory}: read-only file system")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise StorageError(f"cannot write to {directory}: permission denied")
+    free = free_bytes(base)
+    if need and free < need:
+        raise StorageError(f"cannot write to {directory}: no space left on device (the run "
+                           f"needs about {_human(need)}, {_human(free)} free)")
+
+
+def remove(paths: Iterable[str | os.PathLike[str]]) -> None:
+    """Delete files and directories (``--overwrite`` of stale outputs)."""
+    for path in map(Path, paths):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink(missing_ok=True)
