@@ -16,7 +16,7 @@ from typing import Any, NoReturn
 
 from softcell._version import __version__
 from softcell.core.config import CHECKPOINT_EVERY
-from softcell.core.errors import SoftcellError
+from softcell.core.errors import SchemaError, SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig, load_config
 
@@ -130,9 +130,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     realizations = args.realizations if args.realizations is not None else run.get(
         "realizations", 1)
     seed = args.seed if args.seed is not None else run.get("seed", 0)
-    for name, value in (("realizations", realizations), ("workers", args.workers)):
-        if value is not None and value < 1:
-            raise SoftcellError(f"--{name} = {value} is not allowed: must be >= 1")
+    if args.workers is not None and args.workers < 1:
+        raise SoftcellError(f"--workers = {args.workers} is not allowed: must be >= 1")
     if not (math.isfinite(args.checkpoint_every) and args.checkpoint_every > 0):
         raise SoftcellError(f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
                             "must be finite and > 0 s")
@@ -162,6 +161,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 def _cmd_render(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
+    from softcell.io.schema import validate
     from softcell.io.video import render
 
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
@@ -178,6 +178,10 @@ def _cmd_render(args: argparse.Namespace) -> int:
         size = ()
     if size is not None and len(size) != 2:
         raise SoftcellError(f"--size = {args.size!r} is not allowed: must be WIDTHxHEIGHT px")
+    try:
+        validate(ds)
+    except SchemaError as exc:
+        raise SoftcellError(f"{args.input} cannot be rendered: {exc}") from None
     info = render(ds, args.output, realization=args.realization, point=point,
                   px_per_cm=args.px_per_cm,
                   fps=args.fps, size=size, start=args.start, end=args.end, noise=args.noise,

@@ -56,6 +56,8 @@ def world(tmp_path_factory):
     (w / "trunc.nc").write_bytes(whole[: len(whole) // 2])
     ds = softcell.read_dataset(w / "sim" / "point000_realization0000.nc")
     softcell.write_dataset(ds.drop_vars("bot_angle"), w / "novar.nc")
+    analysis = softcell.read_dataset(w / "an.nc")
+    softcell.write_dataset(analysis.drop_vars(["stop_pdf", "go_pdf"]), w / "nopdf.nc")
     (w / "notes.txt").write_text("a user's own notes\n")
     writer = cv2.VideoWriter(str(w / "grey.mkv"), cv2.VideoWriter_fourcc(*"FFV1"), 30, (64, 64))
     for _ in range(5):
@@ -133,7 +135,8 @@ BAD = [
     (["figures", "W/trunc.nc", "-o", "W/figs"], ["truncated or corrupt"]),
     (["render", "W/empty.nc", "-o", "W/out.mkv"], ["empty (0 bytes)"]),
     (["render", "W/trunc.nc", "-o", "W/out.mkv"], ["truncated or corrupt"]),
-    (["render", "W/novar.nc", "-o", "W/out.mkv"], ["bot_angle: missing"]),
+    (["render", "W/novar.nc", "-o", "W/out.mkv"], ["novar.nc cannot be rendered",
+                                                   "bot_angle: missing"]),
     (["render", "W/sim", "-o", "W/out.mkv"], ["sweep over radius", "radius=INDEX"]),
     (["render", "W/sim", "--point", "radius=0", "--px-per-cm", "inf", "-o", "W/out.mkv"],
      ["px_per_cm = inf", "must be finite"]),
@@ -156,6 +159,8 @@ BAD = [
     (["figures", "W/an.nc", "--tracked", "W/tr.nc", "-o", "W/figs"],
      ["tracked input is a tracking file, not an analysis"]),
     (["figures", "W/tr.nc", "-o", "W/figs"], ["analysis input is a tracking file"]),
+    (["figures", "W/an.nc", "--tracked", "W/nopdf.nc", "-o", "W/figs"],
+     ["tracked input lacks stop_pdf, go_pdf"]),
     (["render", "W/sim", "--point", "radius=7", "-o", "W/out.mkv"],
      ["radius index 7 is not allowed: 0 .. 1"]),
 ]

@@ -275,9 +275,10 @@ def check_output(path: str | os.PathLike[str], kind: str, *,
     elif path.exists() and not overwrite:
         found = kind_of(path)
         if found != kind:
-            what = f"a softcell {found} file" if found else "not a softcell " + kind + " file"
-            raise SoftcellError(f"{option} {path} exists and is {what}; pass --overwrite to "
-                                "replace it")
+            what = ("exists (a video carries no mark of who made it)" if kind == "video"
+                    else f"exists and is a softcell {found} file" if found
+                    else f"exists and is not a softcell {kind} file")
+            raise SoftcellError(f"{option} {path} {what}; pass --overwrite to replace it")
     check_writable(path if directory else path.parent)
     return path
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from softcell._version import __version__
+from softcell.io.files import atomic_write
 from softcell.testing.compare import parameters, run
 
 RADII = (4.0, 8.0, 12.0)
@@ -35,8 +36,10 @@ def main() -> None:
         arrays[f"{key}_modes"] = result.record.modes
         arrays[f"{key}_pose"] = result.record.pose
         print(f"R = {radius:g} cm: {result.wall:.1f} s wall", flush=True)
-    np.savez_compressed(OUT, radii=np.array(RADII), duration=DURATION, seed=SEED,
-                        version=__version__, command=" ".join(["python", *sys.argv]), **arrays)
+    with atomic_write(OUT) as tmp:
+        np.savez_compressed(tmp, radii=np.array(RADII), duration=DURATION, seed=SEED,
+                            version=__version__, command=" ".join(["python", *sys.argv]),
+                            **arrays)
 
 
 if __name__ == "__main__":
