@@ -137,7 +137,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                             "must be finite and > 0 s")
     paths = simulate(config, args.output, realizations=realizations, seed=seed,
                      workers=args.workers or 1, scheduler=args.scheduler,
-                     membrane=not args.free_bot, overwrite=args.overwrite,
+                     membrane=not args.free_bot, overwrite=args.overwrite, log=_note,
                      progress=not args.quiet, checkpoint_every=args.checkpoint_every)
     print(f"{len(paths)} files in {args.output}")
     return 0
@@ -388,6 +388,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_reproduce)
     return parser
+
+
+def _note(line: str) -> None:
+    print(f"softcell: {line}", file=sys.stderr)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

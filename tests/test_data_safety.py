@@ -256,8 +256,10 @@ def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
     assert "softcell version = 0.1.0 there, 99.0 in this request" in capsys.readouterr().err
 
 
-def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path):
+def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path,
+                                                                         capsys):
     assert _simulate(sweep, "--overwrite", radius="4") == 0
+    assert "--overwrite: removing 1 file(s)" in capsys.readouterr().err  # never silently
     assert sorted(p.name for p in sweep.iterdir()) == ["point000_realization0000.nc"]
     assert _simulate(tmp_path / "fresh", radius="4") == 0
     name = "point000_realization0000.nc"

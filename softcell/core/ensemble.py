@@ -422,7 +422,8 @@ def expected_bytes(tasks: list[Task]) -> int:
 def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: int = 1,
              seed: int = 0, workers: int = 1, scheduler: str | None = None,
              client: Any = None, membrane: bool = True, progress: bool = True,
-             checkpoint_every: float = CHECKPOINT_EVERY, overwrite: bool = False) -> list[Path]:
+             checkpoint_every: float = CHECKPOINT_EVERY, overwrite: bool = False,
+             log: Callable[[str], None] | None = None) -> list[Path]:
     """Run an ensemble: every parameter point of ``config`` x ``realizations``.
 
     Finished files already in ``out`` are kept when they match the request exactly (see
@@ -439,7 +440,9 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
         ``workers``.
     overwrite : bool
         Recompute files and checkpoints in ``out`` that do not match the request, and remove
-        simulation files that are no part of it.
+        simulation files that are no part of it (``log`` is told which).
+    log : callable, optional
+        Receives one line naming what ``overwrite`` removes.
 
     Returns
     -------
@@ -472,6 +475,10 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
     check_writable(out, expected_bytes(resume.todo))
     if scheduler is not None:
         check_scheduler(scheduler)
+    if resume.remove and log:
+        names = [p.name for p in resume.remove]
+        log(f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
+            f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})")
     remove(resume.remove)
     out.mkdir(parents=True, exist_ok=True)
     todo = resume.todo

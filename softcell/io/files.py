@@ -164,6 +164,8 @@ class _Staging:
 
     def path(self, final: str | os.PathLike[str]) -> Path:
         final = Path(final)
+        if final.is_dir():
+            raise SoftcellError(f"cannot write {final}: it is a directory")
         if self.makedirs:
             missing = [p for p in (final.parent, *final.parent.parents) if not p.exists()]
             self.created.extend(reversed(missing))

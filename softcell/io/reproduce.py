@@ -249,11 +249,11 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
             cluster_client(workers or 1, scheduler))
         with step("simulations", f"simulating {design.describe()}"):
             simulate(config, out / "simulations", realizations=design.realizations, seed=seed,
-                     client=client, progress=progress, overwrite=overwrite)
+                     client=client, progress=progress, overwrite=overwrite, log=say)
         with step("free_bot", "simulating the free bot"):
             simulate(free, out / "free_bot", realizations=design.free_bot_realizations,
                      seed=seed, client=client, membrane=False, progress=progress,
-                     overwrite=overwrite)
+                     overwrite=overwrite, log=say)
     with step("analysis", "analysing the sweep and the free bot"):
         # One dask chunk per file: the analysis holds one radius in memory at a time.
         analysis = analyze(open_dataset(out / "simulations", chunks={}), options,

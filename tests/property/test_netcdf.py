@@ -104,3 +104,9 @@ def test_files_that_are_not_one_sweep_are_refused(tmp_path):
     a, b = _dataset(realization=0), _dataset(realization=0)
     with pytest.raises(SoftcellError, match="one sweep"):
         combine_sweep([a, b])
+
+
+def test_a_directory_is_no_file_name(tmp_path):
+    with pytest.raises(SoftcellError, match="is a directory"):
+        write_dataset(_dataset(), tmp_path)
+    assert list(tmp_path.iterdir()) == []
