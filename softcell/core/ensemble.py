@@ -101,7 +101,8 @@ SAMPLES_PER_CALL = 100
 def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
                     label: object = 0, checkpoint: Path | None = None,
                     fingerprint: str = "", checkpoint_every: float = CHECKPOINT_EVERY,
-                    progress: Callable[[float], None] | None = None) -> Record:
+                    progress: Callable[[float], None] | None = None,
+                    stop: Callable[[], bool] | None = None) -> Record:
     """Integrate one realization over the sampling grid of ``model.params``.
 
     Parameters
@@ -112,12 +113,14 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
         (the task's request, as JSON) exists; one made for another request is an error.
     progress : callable, optional
         Called with the simulated seconds advanced since its last call.
+    stop : callable, optional
+        Asked between chunks of samples; True stops the run as Ctrl-C does.
 
     Raises
     ------
     Interrupted
-        On Ctrl-C (a ``KeyboardInterrupt``), after saving the checkpoint of the last
-        finished chunk; its message says where the run stopped.
+        On Ctrl-C (a ``KeyboardInterrupt``) or ``stop``, after saving the checkpoint of the
+        last finished chunk; its message says where the run stopped.
     """
     times = sample_times(model.params)
     modes, pose, schedule = initial_state(model, rng)
@@ -153,6 +156,8 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
             if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
                 _save_checkpoint(checkpoint, fingerprint, j, rec_modes, rec_pose, state)
                 last_save = time.monotonic()
+            if stop is not None and stop():
+                raise KeyboardInterrupt
     except KeyboardInterrupt:
         # The stepper may have been stopped half way through a chunk: save what is whole.
         if checkpoint is not None:
@@ -224,9 +229,21 @@ def _model_and_stepper(task: Task, extra_specs) -> tuple[Model, Stepper]:
     return _BUILT[key]
 
 
+#: A file in the output directory asking the realizations running on a cluster to save a
+#: checkpoint and stop (what Ctrl-C does to this process; see :func:`run_on_cluster`).
+STOP_FILE = ".softcell-stop"
+#: Wall seconds a cluster's realizations get to checkpoint and stop after Ctrl-C.
+STOP_GRACE = 30.0
+
+
 def run_task(task: Task, progress: Callable[[float], None] | None = None,
-             checkpoint_every: float = CHECKPOINT_EVERY) -> str:
-    """Run one (point, realization) and write its file atomically; returns the path."""
+             checkpoint_every: float = CHECKPOINT_EVERY, stoppable: bool = False
+             ) -> str | None:
+    """Run one (point, realization) and write its file atomically; returns the path.
+
+    With ``stoppable`` (on a cluster), :data:`STOP_FILE` appearing beside the file makes the
+    realization save its checkpoint and return None.
+    """
     from softcell.core.registry import PluginWarning, get_registry
     from softcell.io.netcdf import write_dataset
 
@@ -236,11 +253,17 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
     model, stepper = _model_and_stepper(task, specs)
     path = Path(task.path)
     checkpoint = checkpoint_path(path)
-    record = run_realization(model, stepper, realization_rng(task.seed, task.point,
-                                                             task.realization),
-                             label=task.name, checkpoint=checkpoint,
-                             fingerprint=_canonical(task.request(specs)),
-                             checkpoint_every=checkpoint_every, progress=progress)
+    stop_file = path.parent / STOP_FILE
+    try:
+        record = run_realization(
+            model, stepper, realization_rng(task.seed, task.point, task.realization),
+            label=task.name, checkpoint=checkpoint, fingerprint=_canonical(task.request(specs)),
+            checkpoint_every=checkpoint_every, progress=progress,
+            stop=stop_file.exists if stoppable else None)
+    except Interrupted:
+        if not stoppable:
+            raise
+        return None  # asked to stop: the checkpoint is saved
     ds = record_dataset(record, model, realization=task.realization, seed=task.seed,
                         components=task.stored_components,
                         extra_attrs={"softcell_point": task.point,
@@ -479,7 +502,7 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
         names = [p.name for p in resume.remove]
         log(f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
             f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})")
-    remove(resume.remove)
+    remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     out.mkdir(parents=True, exist_ok=True)
     todo = resume.todo
     total = sum(_duration(t) for t in todo)
@@ -523,11 +546,31 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
             yield client
         return
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    # Workers log at ERROR only: a cancelled task (Ctrl-C) is no warning to the user.
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
-            Client(cluster) as client:
+    # Workers log at ERROR only (a task cancelled by Ctrl-C is no warning to the user), and
+    # ignore SIGINT, which a terminal sends the whole process group: this process handles
+    # Ctrl-C, cancels the tasks and closes the cluster in order.
+    with _sigint_ignored_by_children():
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
         yield client
+
+
+@contextmanager
+def _sigint_ignored_by_children() -> Iterator[None]:
+    """Within the block, SIGINT is ignored, so processes started here inherit that (an
+    ignored signal stays ignored across fork and exec); restored on exit."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] | None = None,
@@ -538,7 +581,7 @@ def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] 
     """
     from distributed import as_completed
 
-    futures = {client.submit(run_task, task, None, checkpoint_every, pure=False): task
+    futures = {client.submit(run_task, task, None, checkpoint_every, True, pure=False): task
                for task in tasks}
     paths = []
     try:
@@ -547,13 +590,33 @@ def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] 
             if progress:
                 progress(_duration(futures[future]))
     except KeyboardInterrupt:
-        client.cancel(list(futures))
-        running = [t for f, t in futures.items() if f.status != "finished"]
-        raise Interrupted(_where(running, len(futures) - len(running), len(futures))) from None
+        raise Interrupted(_stop(client, futures)) from None
     except BaseException:
         client.cancel(list(futures))
         raise
     return paths
+
+
+def _stop(client, futures: dict[Any, Task]) -> str:
+    """After Ctrl-C: ask the running realizations to checkpoint and stop (through
+    :data:`STOP_FILE`), wait for them (:data:`STOP_GRACE`, or a second Ctrl-C), cancel the rest,
+    and say where the run stood."""
+    from distributed import wait
+
+    stop_files = {Path(t.path).parent / STOP_FILE for t in futures.values()}
+    try:
+        for stop_file in stop_files:
+            stop_file.touch()
+        wait(list(futures), timeout=STOP_GRACE)
+    except (KeyboardInterrupt, TimeoutError, OSError):
+        pass
+    finally:
+        client.cancel(list(futures))
+        for stop_file in stop_files:
+            stop_file.unlink(missing_ok=True)
+    done = [t for f, t in futures.items() if f.status == "finished" and f.result() is not None]
+    unfinished = [t for t in futures.values() if t not in done]
+    return _where(unfinished, len(done), len(futures))
 
 
 def _where(unfinished: list[Task], finished: int, total: int) -> str:
