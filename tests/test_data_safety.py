@@ -485,6 +485,9 @@ requests = st.fixed_dictionaries({
 @example(second={"radius": [4.0, 5.0], "duration": 0.3, "tension": 0.02, "seed": 0,
                  "realizations": 1, "integrator": "explicit_euler",
                  "energy_terms": ["bending", "tension", "contact"], "membrane": True})
+@example(second={"radius": [4.0, 5.0, 6.0], "duration": 0.3, "tension": None, "seed": 0,
+                 "realizations": 1, "integrator": "explicit_euler",
+                 "energy_terms": ["bending", "tension", "contact"], "membrane": True})
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
     from softcell.core.ensemble import plan, resume_plan, stored_request
     from softcell.core.errors import SoftcellError
@@ -511,8 +514,13 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
         if task.path not in todo:  # reused: made with exactly this request
             assert stored_request(Path(task.path))[0] == task.request(specs)
     assert resume.reused == len(tasks) - len(todo)
-    identical = (second["radius"] == [4.0, 5.0] and second["duration"] == 0.3
-                 and second["tension"] in (None, 0.02) and second["seed"] == 0
-                 and second["integrator"] == "explicit_euler" and second["membrane"]
-                 and second["energy_terms"] == ["bending", "tension", "contact"])
-    assert resume.reused == (2 if identical else 0)
+    # Independently: the first run made realization 0 of radius 4 (point 0) and 5 (point 1);
+    # a task may reuse its file only if every other setting is the first run's too.
+    same_settings = (second["duration"] == 0.3 and second["tension"] in (None, 0.02)
+                     and second["seed"] == 0 and second["integrator"] == "explicit_euler"
+                     and second["membrane"]
+                     and second["energy_terms"] == ["bending", "tension", "contact"])
+    made = {0: 4.0, 1: 5.0}
+    expected = sum(1 for t in tasks if same_settings and t.realization == 0
+                   and made.get(t.point) == second["radius"][t.point])
+    assert resume.reused == expected

@@ -392,10 +392,9 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
     no part of the request (a larger sweep, more realizations) stop the run too, as they
     would be read as part of the sweep; ``overwrite`` removes them.
     """
-    from softcell.core.registry import get_registry
     from softcell.io.files import kind_of
 
-    specs = list(get_registry().parameter_specs().values())
+    specs = _specs()
     resume = Resume([], [], 0)
     if not out.exists():
         return Resume(list(tasks), [], 0)
@@ -436,9 +435,7 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
 
 def expected_bytes(tasks: list[Task]) -> int:
     """Disk space (bytes) the files of ``tasks`` will take, about."""
-    from softcell.core.registry import get_registry
-
-    specs = list(get_registry().parameter_specs().values())
+    specs = _specs()
     return sum(file_bytes(Parameters(t.values, specs)) for t in tasks)
 
 
@@ -522,9 +519,7 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
 
 
 def _duration(task: Task) -> float:
-    from softcell.core.registry import get_registry
-
-    return float(Parameters(task.values, get_registry().parameter_specs().values()).duration)
+    return float(Parameters(task.values, _specs()).duration)
 
 
 @contextmanager

@@ -39,7 +39,8 @@ def machine_memory() -> int:
         return 8 << 30
 
 
-def _human(n: float) -> str:
+def human_bytes(n: float) -> str:
+    """A byte count with a binary unit, to 3 significant digits (``"23.5 GiB"``)."""
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
             return f"{n:.3g} {unit}"
@@ -105,8 +106,9 @@ def check_run(params, memory: int | None = None) -> None:
     unit = "" if spec.unit == "1" else f" {spec.unit}"
     shown = f"{int(largest)}" if spec.kind is int else f"{largest:.3g}"
     raise ParameterError(name, params[name], f"must be <= {shown}{unit}: one realization "
-                         f"would need {_human(total)} of memory, more than "
-                         f"{MEMORY_FRACTION:.0%} of this machine's {_human(memory)}", spec.unit)
+                         f"would need {human_bytes(total)} of memory, more than "
+                         f"{MEMORY_FRACTION:.0%} of this machine's {human_bytes(memory)}",
+                         spec.unit)
 
 
 def max_radius(contact_length: float) -> float:

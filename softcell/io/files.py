@@ -24,6 +24,7 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 
 from softcell.core.errors import SoftcellError
+from softcell.core.limits import human_bytes
 
 #: The kinds of output, and how an existing file of that kind is recognised.
 KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report")
@@ -61,14 +62,6 @@ def _read_only(path: Path) -> bool:
     return bool(os.statvfs(_existing_ancestor(path)).f_flag & os.ST_RDONLY)
 
 
-def _human(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
-        if abs(n) < 1024 or unit == "TiB":
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
-        n /= 1024
-    return f"{n} B"  # pragma: no cover
-
-
 def storage_problem(path: str | os.PathLike[str], exc: BaseException | None = None,
                     need: int = FULL_DISK_BYTES) -> str | None:
     """Why writing ``path`` failed, if the file system says: ``"no space left on device"``,
@@ -98,7 +91,7 @@ def storage_problem(path: str | os.PathLike[str], exc: BaseException | None = No
 
 def _error(path: Path, problem: str) -> StorageError:
     where = _existing_ancestor(path.parent)
-    return StorageError(f"cannot write {path}: {problem} ({_human(free_bytes(where))} free "
+    return StorageError(f"cannot write {path}: {problem} ({human_bytes(free_bytes(where))} free "
                         f"in {where})" if problem == "no space left on device"
                         else f"cannot write {path}: {problem}")
 
@@ -299,7 +292,7 @@ def check_writable(directory: str | os.PathLike[str], need: int = 0) -> None:
     free = free_bytes(base)
     if need and free < need:
         raise StorageError(f"cannot write to {directory}: no space left on device (the run "
-                           f"needs about {_human(need)}, {_human(free)} free)")
+                           f"needs about {human_bytes(need)}, {human_bytes(free)} free)")
 
 
 def remove(paths: Iterable[str | os.PathLike[str]]) -> None:
