@@ -29,8 +29,8 @@ def explicit_step(radius: float, protocol: str, warmup: float, span: float, seed
     """Time one explicit Euler ``advance`` of ``span`` s after ``warmup`` s; return us per
     step and simulated seconds per wall second."""
     from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.ensemble import realization_rng
     from softcell.core.params import Parameters
+    from softcell.workflows.ensemble import realization_rng
 
     params = Parameters({"radius": radius, "duration": warmup + span})
     model = build_model(params, ["bending", "tension", "contact"], protocol)

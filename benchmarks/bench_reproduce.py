@@ -13,7 +13,7 @@ import time
 
 
 def rows() -> list[dict[str, object]]:
-    from softcell.io.reproduce import QUICK, reproduce
+    from softcell.workflows.reproduce import QUICK, reproduce
 
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()

@@ -19,10 +19,10 @@ IN_MEMORY = 150
 def rows() -> list[dict[str, object]]:
     import cv2
 
-    from softcell.core.ensemble import simulate
     from softcell.core.runconfig import RunConfig
     from softcell.io.netcdf import read_dataset
     from softcell.io.video import Tracker, render, track
+    from softcell.workflows.ensemble import simulate
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

@@ -10,18 +10,18 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from softcell._version import __version__
-from softcell.core.errors import ConfigError, ParameterError, SchemaError, SoftcellError
-from softcell.core.hookspecs import hookimpl
 from softcell.core.params import Parameters
+from softcell.core.plugin.hookspecs import hookimpl
+from softcell.errors import ConfigError, ParameterError, SchemaError, SoftcellError
 
 if TYPE_CHECKING:
     from softcell.core.analysis import analyze
-    from softcell.core.ensemble import simulate
     from softcell.core.runconfig import RunConfig
+    from softcell.core.schema import validate
     from softcell.io.figures import make_figures
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
-    from softcell.io.reproduce import reproduce
-    from softcell.io.schema import validate
+    from softcell.workflows.ensemble import simulate
+    from softcell.workflows.reproduce import reproduce
 
 __all__ = [
     "ConfigError",
@@ -46,11 +46,11 @@ _LAZY = {
     "open_dataset": "softcell.io.netcdf",
     "read_dataset": "softcell.io.netcdf",
     "write_dataset": "softcell.io.netcdf",
-    "validate": "softcell.io.schema",
+    "validate": "softcell.core.schema",
     "analyze": "softcell.core.analysis",
-    "simulate": "softcell.core.ensemble",
+    "simulate": "softcell.workflows.ensemble",
     "RunConfig": "softcell.core.runconfig",
-    "reproduce": "softcell.io.reproduce",
+    "reproduce": "softcell.workflows.reproduce",
     "make_figures": "softcell.io.figures",
 }
 

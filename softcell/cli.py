@@ -15,10 +15,10 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from softcell._version import __version__
-from softcell.core.config import CHECKPOINT_EVERY
-from softcell.core.errors import SchemaError, SoftcellError
+from softcell.config import CHECKPOINT_EVERY
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig, load_config
+from softcell.errors import SchemaError, SoftcellError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -48,7 +48,7 @@ def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[Parame
 def _add_component_flags(parser: argparse.ArgumentParser) -> None:
     """Flags for the parameters that registered components declare beyond the model's
     (e.g. rodas4's --atol and --rtol)."""
-    from softcell.core.registry import get_registry
+    from softcell.core.plugin.registry import get_registry
 
     specs = [s for name, s in get_registry().parameter_specs().items()
              if name not in MODEL_PARAMETERS]
@@ -72,7 +72,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
 
 
 def _cmd_plugins(args: argparse.Namespace) -> int:
-    from softcell.core.registry import KINDS, get_registry
+    from softcell.core.plugin.registry import KINDS, get_registry
 
     registry = get_registry()
     for kind in KINDS.values():
@@ -118,7 +118,7 @@ def _cmd_params(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from softcell.core.ensemble import simulate
+    from softcell.workflows.ensemble import simulate
 
     config = _config(args)
     components = {k: v for k, v in (("driving_protocol", args.protocol),
@@ -159,9 +159,9 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
+    from softcell.core.schema import validate
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
-    from softcell.io.schema import validate
     from softcell.io.video import render
 
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
@@ -244,7 +244,7 @@ def _cmd_figures(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from softcell.io.reproduce import DESIGNS, reproduce
+    from softcell.workflows.reproduce import DESIGNS, reproduce
 
     outcome = reproduce(args.output, DESIGNS["full" if args.full else "quick"], seed=args.seed,
                         workers=args.workers, scheduler=args.scheduler,
@@ -401,7 +401,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``softcell`` command; returns the exit status (2 for bad input, 130 when
     interrupted)."""
-    from softcell.core.registry import PluginWarning
+    from softcell.core.plugin.registry import PluginWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("once", PluginWarning)
@@ -422,7 +422,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _plugin_warning(show):
     """Plugin warnings as one line each; other warnings as Python shows them."""
-    from softcell.core.registry import PluginWarning
+    from softcell.core.plugin.registry import PluginWarning
 
     default = warnings.showwarning
 

@@ -249,7 +249,7 @@ def test_a_file_of_another_spawn_key_is_not_reused(sweep, capsys):
 
 
 def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
-    import softcell.core.ensemble as ensemble
+    import softcell.workflows.ensemble as ensemble
 
     monkeypatch.setattr(ensemble, "__version__", "99.0")
     assert _simulate(sweep) == 2
@@ -267,7 +267,7 @@ def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, 
 
 
 def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path, capsys):
-    from softcell.core.ensemble import _save_checkpoint, checkpoint_path
+    from softcell.workflows.ensemble import _save_checkpoint, checkpoint_path
 
     out = tmp_path / "sim"
     out.mkdir()
@@ -285,8 +285,8 @@ def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path
 
 
 def test_reproduce_into_a_folder_of_another_design_or_seed_stops_before_computing(tmp_path):
-    from softcell.core.errors import SoftcellError
-    from softcell.io.reproduce import MANIFEST, Design, _manifest, reproduce
+    from softcell.errors import SoftcellError
+    from softcell.workflows.reproduce import MANIFEST, Design, _manifest, reproduce
 
     design = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0)
     (tmp_path / MANIFEST).write_text(json.dumps(_manifest(design, 0)))
@@ -428,7 +428,7 @@ def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_
                                                                              monkeypatch):
     from test_registry import fake_entry_points
 
-    from softcell.core.registry import PluginWarning, Registry
+    from softcell.core.plugin.registry import PluginWarning, Registry
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken", good="good")
     # The warning names the distribution "softcell-fake": that name blocks its plugins
@@ -444,7 +444,7 @@ def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkey
                                                                   capsys):
     from test_registry import fake_entry_points
 
-    from softcell.core import registry as reg
+    from softcell.core.plugin import registry as reg
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken")
     monkeypatch.setattr(reg, "_override", [])
@@ -489,10 +489,10 @@ requests = st.fixed_dictionaries({
                  "realizations": 1, "integrator": "explicit_euler",
                  "energy_terms": ["bending", "tension", "contact"], "membrane": True})
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
-    from softcell.core.ensemble import plan, resume_plan, stored_request
-    from softcell.core.errors import SoftcellError
-    from softcell.core.registry import get_registry
+    from softcell.core.plugin.registry import get_registry
     from softcell.core.runconfig import RunConfig
+    from softcell.errors import SoftcellError
+    from softcell.workflows.ensemble import plan, resume_plan, stored_request
 
     out = world / "sim"  # made with FIRST, seed 0, 1 realization, the membrane
     values = {**FIRST, "radius": second["radius"], "duration": second["duration"]}

@@ -3,9 +3,9 @@
 import inspect
 from pathlib import Path
 
-from softcell.core import hookspecs
-from softcell.core.components import CONTRACTS
-from softcell.core.registry import KINDS
+from softcell.core.plugin import hookspecs
+from softcell.core.plugin.contracts import CONTRACTS
+from softcell.core.plugin.registry import KINDS
 
 DOC = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
 

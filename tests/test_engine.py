@@ -13,7 +13,6 @@ from numba import njit
 
 import softcell
 from softcell.cli import main
-from softcell.core.components import EnergyTerm
 from softcell.core.engine import (
     SimulationError,
     build_integrator,
@@ -23,11 +22,12 @@ from softcell.core.engine import (
     sample_times,
     total_energy,
 )
-from softcell.core.ensemble import simulate
-from softcell.core.errors import ParameterError
 from softcell.core.params import Parameters, ParameterSpec
+from softcell.core.plugin.contracts import EnergyTerm
 from softcell.core.runconfig import RunConfig
+from softcell.errors import ParameterError
 from softcell.testing import registered
+from softcell.workflows.ensemble import simulate
 
 # A coarse membrane (cutoff 4) is stable at dt = 1e-5 s, which keeps these tests fast.
 COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}
@@ -68,7 +68,7 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]
 
-    import softcell.core.ensemble as ensemble
+    import softcell.workflows.ensemble as ensemble
 
     calls = {"n": 0}
     original = ensemble.run_realization
@@ -107,7 +107,7 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
     stepper = build_integrator("explicit_euler", params).build(model)
     model.membrane_mobility *= 1e4
-    from softcell.core.ensemble import realization_rng, run_realization
+    from softcell.workflows.ensemble import realization_rng, run_realization
 
     with pytest.raises(SimulationError, match=r"realization 7: (non-finite modes|membrane length)"
                                               r".* at t = [0-9.e-]+ s"):

@@ -13,7 +13,7 @@ import xarray as xr
 
 from softcell.core.engine import build_model, circle_modes, force_modes
 from softcell.core.params import Parameters
-from softcell.core.registry import get_registry
+from softcell.core.plugin.registry import get_registry
 from softcell.testing import registered
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
@@ -99,8 +99,8 @@ def test_pressure_pushes_a_circle_out_with_force_p_r(example):
 
 
 def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
-    from softcell.core.ensemble import simulate
     from softcell.core.runconfig import RunConfig
+    from softcell.workflows.ensemble import simulate
 
     with example():
         config = RunConfig(parameters={"radius": 5.0, "duration": 8.0}).updated(
@@ -120,8 +120,8 @@ def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
 
 
 def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path):
-    from softcell.core.ensemble import simulate
     from softcell.core.runconfig import RunConfig
+    from softcell.workflows.ensemble import simulate
 
     runs = {}
     with example():

@@ -7,9 +7,9 @@ import types
 import pytest
 
 import softcell
-from softcell.core.components import StopGoDetector
-from softcell.core.errors import ConfigError, RegistryError
-from softcell.core.registry import KINDS, PluginWarning, Registry, get_registry
+from softcell.core.plugin.contracts import StopGoDetector
+from softcell.core.plugin.registry import KINDS, PluginWarning, Registry, get_registry
+from softcell.errors import ConfigError, RegistryError
 from softcell.testing import registered
 
 
@@ -104,7 +104,7 @@ def test_plugin_registered_for_one_test():
 
 
 def test_hook_docs_mention_units():
-    from softcell.core import hookspecs
+    from softcell.core.plugin import hookspecs
 
     for hook in KINDS:
         doc = textwrap.dedent(getattr(hookspecs, hook).__doc__)

@@ -9,9 +9,9 @@ import xarray as xr
 
 import softcell
 from softcell.cli import main
-from softcell.core.errors import SoftcellError
-from softcell.io.report import findings
-from softcell.io.reproduce import Design, VideoDesign, reproduce
+from softcell.errors import SoftcellError
+from softcell.workflows.report import findings
+from softcell.workflows.reproduce import Design, VideoDesign, reproduce
 
 TINY = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0, discard=5.0,
               free_bot_realizations=2, video=VideoDesign(radius=12.0, span=5.0))

@@ -6,7 +6,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softcell.core.components import EnergyTerm
 from softcell.core.engine import (
     build_integrator,
     build_model,
@@ -15,13 +14,14 @@ from softcell.core.engine import (
     force_modes,
     initial_state,
 )
-from softcell.core.ensemble import realization_rng
-from softcell.core.kernels.jacobian import make_fd_hessian
 from softcell.core.params import MODEL_PARAMETERS, Parameters
-from softcell.core.registry import get_registry
+from softcell.core.plugin.contracts import EnergyTerm
+from softcell.core.plugin.registry import get_registry
+from softcell.kernels.jacobian import make_fd_hessian
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
 from softcell.testing import registered
+from softcell.workflows.ensemble import realization_rng
 
 TERMS = ["bending", "tension", "contact"]
 REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"
@@ -73,7 +73,7 @@ def test_analytic_second_derivatives_match_the_fallback(name):
     model = build_model(params, TERMS, "run_and_tumble")
     term = model.terms[TERMS.index(name)]
     n = model.nodes
-    from softcell.core.engine import _curve
+    from softcell.core.engine.reference import _curve
 
     z, zp, zpp = _curve(modes, n)
     w = np.ascontiguousarray(np.stack([z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag]))
@@ -140,7 +140,7 @@ class Plugin:
 
 
 def test_a_term_without_second_derivatives_uses_the_documented_fallback():
-    from softcell.core.hookspecs import hookimpl
+    from softcell.core.plugin.hookspecs import hookimpl
 
     Plugin.softcell_energy_terms = hookimpl(Plugin.softcell_energy_terms)
     with registered(Plugin):
@@ -167,7 +167,7 @@ def test_same_bytes_whatever_the_split_of_the_samples():
 
 
 def test_bad_smooth_grid_is_refused():
-    from softcell.core.errors import ParameterError
+    from softcell.errors import ParameterError
 
     params = Parameters({"radius": 4.0, "smooth_nodes": 32},
                         get_registry().parameter_specs().values())

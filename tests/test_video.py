@@ -6,10 +6,10 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.ensemble import simulate
-from softcell.core.errors import SoftcellError
 from softcell.core.runconfig import RunConfig
+from softcell.errors import SoftcellError
 from softcell.io.video import FLAGS, render, track
+from softcell.workflows.ensemble import simulate
 
 # A coarse membrane (cutoff 4, stable at dt = 1e-5 s) keeps the simulation cheap; the
 # renderer and tracker do not care how the record was made.

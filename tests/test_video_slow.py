@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import softcell
-from softcell.core.ensemble import simulate
 from softcell.core.runconfig import RunConfig
 from softcell.io.video import render, track
+from softcell.workflows.ensemble import simulate
 
 pytestmark = pytest.mark.slow
 COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}

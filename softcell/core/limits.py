@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import os
 
-from softcell.core.errors import ParameterError, SoftcellError
+from softcell.errors import ParameterError, SoftcellError
 
 #: A realization may use at most this fraction of the machine's memory (the rest is for the
 #: other worker, the analysis and the system).

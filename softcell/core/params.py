@@ -20,8 +20,8 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from softcell.core.errors import ConfigError, ParameterError
 from softcell.core.limits import max_radius
+from softcell.errors import ConfigError, ParameterError
 
 Value = float | int | str
 

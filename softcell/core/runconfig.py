@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from softcell.core.errors import ConfigError
 from softcell.core.params import ParameterSpec, suggest
+from softcell.errors import ConfigError
 
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],
@@ -60,7 +60,7 @@ class RunConfig:
     def check_components(self) -> None:
         """Raise :class:`ConfigError` unless every component named exists in the registry
         (with a suggestion for a misspelt one) and no energy term is named twice."""
-        from softcell.core.registry import get_registry
+        from softcell.core.plugin.registry import get_registry
 
         registry = get_registry()
         terms = self.components.get("energy_terms", [])
@@ -80,7 +80,7 @@ class RunConfig:
 
     def extra_specs(self) -> list[ParameterSpec]:
         """Parameters declared by registered components (e.g. the detector's ``threshold``)."""
-        from softcell.core.registry import get_registry
+        from softcell.core.plugin.registry import get_registry
 
         return list(get_registry().parameter_specs().values())
 

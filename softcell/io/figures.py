@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from softcell.core.errors import SoftcellError
+from softcell.errors import SoftcellError
 from softcell.io.files import atomic_files
 
 #: Background colour of each regime (``regime`` flag value), as in the paper.
@@ -390,7 +390,7 @@ def check_inputs(analysis: xr.Dataset, *, simulations: xr.Dataset | None = None,
                             "dimension); this analysis has dims "
                             f"{', '.join(analysis.dims) or 'none'}")
     if simulations is not None:
-        from softcell.io.schema import validate
+        from softcell.core.schema import validate
 
         validate(simulations)
 

@@ -23,8 +23,8 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from softcell.core.errors import SoftcellError
 from softcell.core.limits import human_bytes
+from softcell.errors import SoftcellError
 
 #: The kinds of output, and how an existing file of that kind is recognised.
 KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report")

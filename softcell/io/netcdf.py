@@ -20,8 +20,8 @@ import numpy as np
 import xarray as xr
 
 import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
-from softcell.core.errors import SoftcellError
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
+from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 
 #: Keyword arguments that keep simulated time as plain seconds.

@@ -31,7 +31,7 @@ import xarray as xr
 
 from softcell._version import __version__
 from softcell.core.analysis.series import polygon_area_perimeter_centroid
-from softcell.core.errors import SoftcellError
+from softcell.errors import SoftcellError
 from softcell.io.files import StorageError, atomic_write, storage_problem
 
 SHIFT = 4  # fixed-point bits of OpenCV drawing coordinates: 1/16 px
@@ -154,7 +154,7 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
     -------
     RenderInfo
     """
-    from softcell.io.schema import validate
+    from softcell.core.schema import validate
 
     for name, value, unit in (("px_per_cm", px_per_cm, "px/cm"), ("fps", fps, "1/s"),
                               ("band_width", band_width, "cm")):
@@ -588,7 +588,7 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     """
     from tqdm.auto import tqdm
 
-    from softcell.io.schema import COORDINATES, VARIABLES, global_attrs, validate
+    from softcell.core.schema import COORDINATES, VARIABLES, global_attrs, validate
 
     video = Path(video)
     if nodes < 3 or nodes > MAX_TRACKED_NODES:

@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from softcell.core.components import EnergyTerm
-from softcell.core.config import JIT
-from softcell.core.hookspecs import hookimpl
+from softcell.config import JIT
 from softcell.core.params import MODEL_PARAMETERS
+from softcell.core.plugin.contracts import EnergyTerm
+from softcell.core.plugin.hookspecs import hookimpl
 
 
 @njit(**JIT)

@@ -16,11 +16,11 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.core.components import EnergyTerm
-from softcell.core.config import CONTACT_CUTOFF_LENGTHS, JIT
-from softcell.core.hookspecs import hookimpl
-from softcell.core.kernels.ellipse import signed_distance, signed_distance_local
+from softcell.config import CONTACT_CUTOFF_LENGTHS, JIT
 from softcell.core.params import MODEL_PARAMETERS
+from softcell.core.plugin.contracts import EnergyTerm
+from softcell.core.plugin.hookspecs import hookimpl
+from softcell.kernels.ellipse import signed_distance, signed_distance_local
 
 
 @njit(**JIT)

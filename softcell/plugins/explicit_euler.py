@@ -15,18 +15,19 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.core.components import Integrator, Schedule
+from softcell.config import JIT_COMPOSED
 from softcell.core.engine import Model, Stepper, explicit_decay_rate
-from softcell.core.errors import ParameterError
-from softcell.core.hookspecs import hookimpl
-from softcell.core.kernels.spectral import assemble, evaluate
 from softcell.core.params import MODEL_PARAMETERS
+from softcell.core.plugin.contracts import Integrator, Schedule
+from softcell.core.plugin.hookspecs import hookimpl
+from softcell.errors import ParameterError
+from softcell.kernels.spectral import assemble, evaluate
 
 _STEPPERS: dict[tuple[int, int], object] = {}
 
 
 def _make_segment(partials, drive):
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
                 coefficients, context, drive_coefficients, mobility, bot_mobility,
                 n_nodes, membrane):

@@ -3,7 +3,7 @@ Wanner, Solving ODEs II, section IV.7; coefficients of their code RODAS), for th
 system: the membrane modes, the contact and the bot (~70 unknowns).
 
 Each step factors W = I / (h gamma) - J once, with J the Jacobian of the full right-hand side
-(:mod:`softcell.core.kernels.jacobian`), and solves six linear systems; the sixth stage is the
+(:mod:`softcell.kernels.jacobian`), and solves six linear systems; the sixth stage is the
 embedded error estimate. Steps adapt to the error (Gustafsson's predictive controller), land
 exactly on the protocol's switching times (within a step the right-hand side is autonomous),
 and samples come from the method's continuous extension, so the sampling grid never
@@ -19,20 +19,21 @@ import numpy as np
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.core.components import Integrator, Schedule
+from softcell.config import JIT_COMPOSED
 from softcell.core.engine import Model, SimulationError, Stepper, compose_partials
-from softcell.core.errors import ParameterError
-from softcell.core.hookspecs import hookimpl
-from softcell.core.kernels.jacobian import (
+from softcell.core.params import ParameterSpec
+from softcell.core.plugin.contracts import Integrator, Schedule
+from softcell.core.plugin.hookspecs import hookimpl
+from softcell.errors import ParameterError
+from softcell.kernels.jacobian import (
     SPARSE_POINTS,
     active_points,
     assemble_jacobian,
     compose_hessians,
     make_fd_drive_jacobian,
 )
-from softcell.core.kernels.linalg import lu_factor, lu_solve
-from softcell.core.kernels.spectral import AXES, assemble, derivative_spectrum
-from softcell.core.params import ParameterSpec
+from softcell.kernels.linalg import lu_factor, lu_solve
+from softcell.kernels.spectral import AXES, assemble, derivative_spectrum
 
 # RODAS4 in Hairer & Wanner's transformed variables: gamma, a_ij, c_ij, dense output h_ij.
 GAMMA = 0.25
@@ -112,7 +113,7 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         drag=np.zeros(3))
 
 
-@njit(nogil=True)
+@njit(**JIT_COMPOSED)
 def _accumulate(g, mobility, out, drag):
     """Add one grid's force modes to the modes' rates in ``out`` and its (2 pi / N)-weighted
     pose derivatives to ``drag``."""
@@ -133,7 +134,7 @@ def _make_grid_functions(partials, hessian, scan):
     otherwise (the fallback's differences, or a small grid) every point is scanned.
     """
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def forces(modes, pose, order, context, coefficients, g):
         """g.fhat (N) and g.dpose of the group at these modes; curve derivatives above
         ``order`` are left at zero."""
@@ -182,7 +183,7 @@ def _make_grid_functions(partials, hessian, scan):
                     acc += complex(p[0, i], p[1, i]) * g.twiddle[(k * i) % n]
                 g.fhat[j] = -acc * inv
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
         """Add the group's part of the Jacobian into ws.jac; g.w must hold the curve and
         g.active the points where the last :func:`forces` at this state found partials."""
@@ -210,7 +211,7 @@ def _make_loop(smooth_group, fine_group, drive):
     has_f, order_f = fine_group[2], fine_group[3]
     fd_drive = make_fd_drive_jacobian(drive)
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobility,
             bot_mobility, membrane, ws):
         """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``.
@@ -237,7 +238,7 @@ def _make_loop(smooth_group, fine_group, drive):
         for c in range(3):
             out[2 * m + c] = bot_mobility[c] * (ws.drv[c] - drag[c])
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
                  bot_mobility, membrane, ws):
         """The Jacobian at u into ``ws.jac``; the grids' ``w`` must hold the curves at u."""
@@ -256,7 +257,7 @@ def _make_loop(smooth_group, fine_group, drive):
             for d in range(3):
                 ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, phases, data,
                    coefficients, context, drive_coefficients, mobility, bot_mobility,
                    membrane, atol, rtol, max_step, a, cc, hd, ws):
@@ -371,7 +372,7 @@ def _make_loop(smooth_group, fine_group, drive):
                     dense[1, i] + (1.0 - theta) * (dense[2, i] + theta * dense[3, i])))
         return OK
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def integrate(u, clock, phase_index, counters, dense, targets, samples, starts, phases,
                   data, coefficients, context, drive_coefficients, mobility, bot_mobility,
                   membrane, atol, rtol, max_step, a, cc, hd, ws):

@@ -13,10 +13,10 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.core.components import DrivingProtocol, Schedule
-from softcell.core.config import JIT
-from softcell.core.hookspecs import hookimpl
+from softcell.config import JIT
 from softcell.core.params import MODEL_PARAMETERS as P
+from softcell.core.plugin.contracts import DrivingProtocol, Schedule
+from softcell.core.plugin.hookspecs import hookimpl
 
 TUMBLE, RUN = 0, 1
 

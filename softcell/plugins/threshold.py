@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from softcell.core.components import StopGoDetector
-from softcell.core.hookspecs import hookimpl
 from softcell.core.params import ParameterSpec
+from softcell.core.plugin.contracts import StopGoDetector
+from softcell.core.plugin.hookspecs import hookimpl
 
 THRESHOLD = ParameterSpec("threshold", 0.03, "cm s-1",
                           "speed below which a sample is stop (0.3 for experiments)",

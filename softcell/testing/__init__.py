@@ -5,6 +5,6 @@
 - :mod:`softcell.testing.strategies`: Hypothesis strategies (needs the ``test`` extra).
 """
 
-from softcell.core.registry import registered
+from softcell.core.plugin.registry import registered
 
 __all__ = ["registered"]

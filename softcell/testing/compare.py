@@ -18,10 +18,10 @@ from softcell.core.engine import (
     build_model,
     force_modes,
 )
-from softcell.core.ensemble import run_realization
 from softcell.core.params import Parameters
-from softcell.core.registry import get_registry
+from softcell.core.plugin.registry import get_registry
 from softcell.plugins.run_and_tumble import RUN, TUMBLE
+from softcell.workflows.ensemble import run_realization
 
 #: The model of the comparisons: the paper's membrane and protocol.
 TERMS = ("bending", "tension", "contact")
@@ -52,7 +52,7 @@ def parameters(radius: float, duration: float, **extra: object) -> Parameters:
 
 def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
     """Run realization 0 of point 0 with root ``seed`` (the ensemble's stream) and time it."""
-    from softcell.core.ensemble import realization_rng
+    from softcell.workflows.ensemble import realization_rng
 
     model = build_model(params, TERMS, PROTOCOL)
     stepper = build_integrator(integrator, params).build(model)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
-from softcell.io.schema import simulation_dataset
+from softcell.core.schema import simulation_dataset
 
 _finite = {"allow_nan": False, "allow_infinity": False}
 

@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from softcell.core.params import Parameters
-from softcell.io.schema import simulation_dataset
+from softcell.core.schema import simulation_dataset
 
 
 def stop_and_go_path(rng: np.random.Generator, times: np.ndarray, speed: float, mean_go: float,

@@ -7,15 +7,15 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
 from softcell.core.engine import build_integrator, build_model
-from softcell.core.ensemble import realization_rng, run_realization
 from softcell.core.freebot import (
     cycle_displacements,
     diffusion_from_cycles,
     renewal_diffusion,
     turn_correlation,
 )
-from softcell.core.kernels.ellipse import signed_distance
 from softcell.core.params import Parameters
+from softcell.kernels.ellipse import signed_distance
+from softcell.workflows.ensemble import realization_rng, run_realization
 
 
 def brute_distance(px, py, a, b):

@@ -5,9 +5,9 @@ import pytest
 
 import softcell
 from softcell.core.engine import build_integrator, build_model, membrane_length
-from softcell.core.ensemble import realization_rng, run_realization, simulate
 from softcell.core.params import Parameters
 from softcell.core.runconfig import RunConfig
+from softcell.workflows.ensemble import realization_rng, run_realization, simulate
 
 pytestmark = pytest.mark.slow
 

@@ -26,7 +26,7 @@ class SoftcellAccessor:
     def validate(self) -> xr.Dataset:
         """The Dataset itself if it follows the schema; else a SchemaError naming every
         problem."""
-        from softcell.io.schema import validate
+        from softcell.core.schema import validate
 
         return validate(self._ds)
 

@@ -11,8 +11,8 @@ import json
 from collections.abc import Mapping
 from typing import Any
 
-from softcell.core.errors import ConfigError
 from softcell.core.params import ParameterSpec, suggest
+from softcell.errors import ConfigError
 
 ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {s.name: s for s in (
     ParameterSpec("discard", 15.0, "s", "initial time left out of every statistic",
@@ -71,7 +71,7 @@ def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
         else:
             out[name] = spec.default
     if out["coupled_below"] > out["decoupled_above"]:
-        from softcell.core.errors import ParameterError
+        from softcell.errors import ParameterError
 
         raise ParameterError("coupled_below", out["coupled_below"],
                              f"must be <= decoupled_above = {out['decoupled_above']:g}", "1")

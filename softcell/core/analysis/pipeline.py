@@ -29,7 +29,7 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
-from softcell.core.errors import SoftcellError
+from softcell.errors import SoftcellError
 
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
@@ -68,7 +68,7 @@ def _radius(ds: xr.Dataset, point: Mapping[str, int]) -> float:
 
 def _detector(name: str, threshold: float | None):
     from softcell.core.params import Parameters
-    from softcell.core.registry import get_registry
+    from softcell.core.plugin.registry import get_registry
 
     cls = get_registry().get("stopgo_detector", name)
     values = {"threshold": threshold} if threshold is not None else {}

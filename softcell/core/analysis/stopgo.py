@@ -14,8 +14,8 @@ import numpy as np
 from scipy import stats
 
 from softcell.core.analysis.series import segment_index, segments
-from softcell.core.components import StopGoDetector
-from softcell.core.kernels.runs import phases
+from softcell.core.plugin.contracts import StopGoDetector
+from softcell.kernels.runs import phases
 
 GO, STOP = 1, 0
 #: Width of the bins of the PDFs of t / <t> (the paper's 0.25).

@@ -6,10 +6,10 @@ to return a ``Stepper`` from ``build(model)``.
 
 import math
 
-from softcell.core.components import Integrator
 from softcell.core.engine import explicit_decay_rate
-from softcell.core.errors import ParameterError
 from softcell.core.params import ParameterSpec
+from softcell.core.plugin.contracts import Integrator
+from softcell.errors import ParameterError
 from softcell.plugins.explicit_euler import ExplicitEulerStepper
 
 SAFETY = ParameterSpec("stability_fraction", 0.5, "1",

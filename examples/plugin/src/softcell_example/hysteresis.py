@@ -5,9 +5,9 @@ A noisy speed near one threshold then no longer flickers between stop and go.
 
 import numpy as np
 
-from softcell.core.components import StopGoDetector
-from softcell.core.errors import ParameterError
 from softcell.core.params import ParameterSpec
+from softcell.core.plugin.contracts import StopGoDetector
+from softcell.errors import ParameterError
 
 
 class Hysteresis(StopGoDetector):

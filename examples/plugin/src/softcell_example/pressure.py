@@ -9,8 +9,8 @@ force density f = -P0 + D(P1) = P (y', -x'): P |gamma'| along the outward normal
 import numpy as np
 from numba import njit
 
-from softcell.core.components import EnergyTerm
 from softcell.core.params import ParameterSpec
+from softcell.core.plugin.contracts import EnergyTerm
 
 PRESSURE = ParameterSpec("pressure", 1e-4, "N cm-1", "2D pressure inside the membrane",
                          minimum=0.0, minimum_inclusive=True)

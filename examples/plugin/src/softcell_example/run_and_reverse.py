@@ -7,8 +7,8 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.core.components import DrivingProtocol, Schedule
 from softcell.core.params import MODEL_PARAMETERS
+from softcell.core.plugin.contracts import DrivingProtocol, Schedule
 
 RUN, TUMBLE = 1, 0  # the bot_phase flag values
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from softcell.core.config import JIT
+from softcell.config import JIT
 
 
 @njit(**JIT)

@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from softcell._version import __version__
-from softcell.core.errors import SchemaError
+from softcell.errors import SchemaError
 
 CONVENTIONS = "CF-1.8"
 

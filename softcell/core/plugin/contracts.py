@@ -3,7 +3,7 @@
 Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
 ``description``, an explicit parameter declaration, and explicit methods; there is no
 ``**kwargs`` catch-all. A component class is registered through a hook of
-:mod:`softcell.core.hookspecs` and instantiated with a validated
+:mod:`softcell.core.plugin.hookspecs` and instantiated with a validated
 :class:`~softcell.core.params.Parameters`.
 """
 
@@ -54,7 +54,7 @@ class Component(ABC):
 
     @classmethod
     def check(cls, params: Parameters) -> None:
-        """Raise :class:`~softcell.core.errors.ParameterError` for a parameter set this component
+        """Raise :class:`~softcell.errors.ParameterError` for a parameter set this component
         cannot run with (beyond the per-parameter ranges). The default accepts everything."""
         return None
 
@@ -222,6 +222,41 @@ class Integrator(Component):
         callable advances the state from one sample time (s) to the next. The exact
         signatures are documented in ``docs/plugins.md``.
         """
+
+
+class Stepper(ABC):
+    """What :meth:`Integrator.build` returns: advances one realization's state in time.
+
+    The state is a dict of numpy arrays, so a checkpoint is a plain ``.npz``: ``modes``
+    (complex128[2 Lc + 1], cm), ``pose`` (float64[3]: cm, cm, rad), ``time`` (float64[1], s)
+    and whatever else the integrator keeps. A stepper implements :meth:`start` and
+    :meth:`advance`; :meth:`sample` has a default built on :meth:`advance`.
+    """
+
+    @abstractmethod
+    def start(self, modes: np.ndarray, pose: np.ndarray, schedule: Schedule
+              ) -> dict[str, np.ndarray]:
+        """The initial state for these modes (cm), pose (cm, cm, rad) and phase schedule."""
+
+    @abstractmethod
+    def advance(self, state: dict[str, np.ndarray], schedule: Schedule, t_end: float) -> None:
+        """Advance ``state`` in place to time ``t_end`` (s)."""
+
+    def sample(self, state: dict[str, np.ndarray], schedule: Schedule, times: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Advance ``state`` through the increasing ``times`` (s) and return the modes
+        (complex128[K, 2 Lc + 1], cm) and poses (float64[K, 3]: cm, cm, rad) there.
+
+        The default calls :meth:`advance` once per time; an integrator whose calls cost more
+        than its steps (one compiled call per sample) overrides it. Either way the result must
+        not depend on how the times are split between calls.
+        """
+        modes = np.empty((len(times), state["modes"].size), dtype=np.complex128)
+        pose = np.empty((len(times), 3))
+        for i, t in enumerate(times):
+            self.advance(state, schedule, float(t))
+            modes[i], pose[i] = state["modes"], state["pose"]
+        return modes, pose
 
 
 class StopGoDetector(Component):

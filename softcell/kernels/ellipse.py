@@ -15,7 +15,7 @@ import math
 
 from numba import njit
 
-from softcell.core.config import ELLIPSE_ITERATIONS, JIT
+from softcell.config import ELLIPSE_ITERATIONS, JIT
 
 
 @njit(**JIT)

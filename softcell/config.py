@@ -11,6 +11,11 @@ from __future__ import annotations
 JIT: dict[str, object] = {"cache": True, "fastmath": False,
                           "error_model": "numpy", "nogil": True}
 
+#: Options of the functions composed at run time from generated source (the sum of the energy
+#: terms, the integrators' loops): those of the kernels, but not cached on disk, as numba
+#: cannot cache a function without a source file.
+JIT_COMPOSED: dict[str, object] = {**JIT, "cache": False}
+
 #: Membrane points farther than this many contact lengths lambda from the bot feel no contact
 #: force (exp(-25) ~ 1.4e-11 of the force at contact).
 CONTACT_CUTOFF_LENGTHS = 25.0

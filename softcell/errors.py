@@ -31,6 +31,16 @@ class SchemaError(SoftcellError, ValueError):
         super().__init__("dataset does not follow the softcell schema: " + "; ".join(problems))
 
 
+class SimulationError(SoftcellError):
+    """A run that blew up: a non-finite value or a membrane length far from l0."""
+
+
+class ContractError(SoftcellError):
+    """A component whose kernels do not match its contract (wrong signature, a kernel that
+    does not compile); the message names the distribution, the component, the kernel and what
+    was expected."""
+
+
 class RegistryError(SoftcellError):
     """Conflicting or malformed plugin components (e.g. two components with one name)."""
 

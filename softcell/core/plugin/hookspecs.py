@@ -29,7 +29,7 @@ def softcell_energy_terms() -> list[type]:
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.components.EnergyTerm`. Each supplies an energy
+        Subclasses of :class:`softcell.core.plugin.contracts.EnergyTerm`. Each supplies an energy
         density per unit of the curve parameter xi (N cm, so that E = integral over xi in
         [0, 2 pi) is in N cm) and a compiled kernel for its pointwise partial derivatives
         P0 = de/dgamma (N), P1 = de/dgamma' (N), P2 = de/dgamma'' (N) at the collocation points,
@@ -46,7 +46,7 @@ def softcell_driving_protocols() -> list[type]:
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.components.DrivingProtocol`. Each draws its whole
+        Subclasses of :class:`softcell.core.plugin.contracts.DrivingProtocol`. Each draws its whole
         phase schedule (start times in s, phase codes, per-phase data) from a
         :class:`numpy.random.Generator`, and supplies a compiled kernel that maps the phase and
         the bot's state (x, y in cm, heading in rad) to a drive force (N) and torque (N cm).
@@ -62,7 +62,7 @@ def softcell_integrators() -> list[type]:
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.components.Integrator`. Each advances the coupled
+        Subclasses of :class:`softcell.core.plugin.contracts.Integrator`. Each advances the coupled
         bot-membrane state (membrane Fourier modes in cm, bot position in cm, heading in rad)
         from one sample time (s) to the next.
 
@@ -82,7 +82,7 @@ def softcell_stopgo_detectors() -> list[type]:
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.components.StopGoDetector`. Each labels every
+        Subclasses of :class:`softcell.core.plugin.contracts.StopGoDetector`. Each labels every
         sample of a speed series (cm/s) as stop (0), go (1) or unknown (-1, where the speed
         is NaN).
 

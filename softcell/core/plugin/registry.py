@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import pluggy
 
-from softcell.core import hookspecs
-from softcell.core.components import CONTRACTS, Component
-from softcell.core.errors import ConfigError, RegistryError
 from softcell.core.params import ParameterSpec, merge_specs, suggest
+from softcell.core.plugin import hookspecs
+from softcell.core.plugin.contracts import CONTRACTS, Component
+from softcell.errors import ConfigError, RegistryError
 
 ENTRY_POINT_GROUP = "softcell"
 DISABLE_ENV = "SOFTCELL_DISABLE_PLUGINS"

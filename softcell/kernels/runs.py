@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from softcell.core.config import JIT
+from softcell.config import JIT
 
 
 @njit(**JIT)

@@ -1,6 +1,6 @@
 """The reproduction report: what ran, every figure, the paper's findings beside ours.
 
-:func:`write_report` reads the files :func:`softcell.io.reproduce.reproduce` wrote and writes
+:func:`write_report` reads the files :func:`softcell.workflows.reproduce.reproduce` wrote and writes
 ``report.md`` and ``report.html`` (the same content; the HTML needs no stylesheet or script
 beyond its own). :func:`findings` sets each finding of the paper beside the measured value and
 a verdict computed from the numbers, with the rule the verdict follows.

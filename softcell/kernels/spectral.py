@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.core.config import JIT
+from softcell.config import JIT
 
 #: The FFT axis of every 1-D transform (a module constant: no allocation per call).
 AXES = np.zeros(1, dtype=np.int64)

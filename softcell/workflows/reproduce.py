@@ -36,8 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from softcell.core.errors import SoftcellError
 from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
+from softcell.errors import SoftcellError
 
 #: spawn_key of the camera-noise stream of the rendered video (no parameter point uses it).
 VIDEO_STREAM = 2**32 - 1
@@ -140,7 +140,7 @@ def _manifest(design: Design, seed: int) -> dict[str, Any]:
 def check_results_directory(out: Path, design: Design, seed: int, overwrite: bool) -> None:
     """Stop, in one line, unless ``out`` is new or empty, or holds a reproduction of the same
     design, seed and version (``overwrite`` lifts both)."""
-    from softcell.core.ensemble import first_mismatch
+    from softcell.workflows.ensemble import first_mismatch
 
     if overwrite or not out.is_dir() or not any(out.iterdir()):
         return
@@ -193,7 +193,11 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         Paths and step timings; the report is ``out / "report.md"`` (and ``report.html``).
     """
     from softcell.core.analysis import analyze
-    from softcell.core.ensemble import (
+    from softcell.core.limits import check_seed
+    from softcell.io.figures import make_figures
+    from softcell.io.files import atomic_write, check_output, check_writable
+    from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
+    from softcell.workflows.ensemble import (
         check_scheduler,
         cluster_client,
         expected_bytes,
@@ -201,11 +205,7 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         resume_plan,
         simulate,
     )
-    from softcell.core.limits import check_seed
-    from softcell.io.figures import make_figures
-    from softcell.io.files import atomic_write, check_output, check_writable
-    from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
-    from softcell.io.report import write_report
+    from softcell.workflows.report import write_report
 
     if design.realizations < 1 or design.free_bot_realizations < 1:
         raise SoftcellError("a design needs at least one realization per radius and one "
@@ -303,9 +303,9 @@ def experimental_pipeline(out: Path, design: Design, seed: int, progress: bool =
     the tracking summary and notes.
     """
     from softcell.core.analysis import analyze
-    from softcell.core.ensemble import plan
     from softcell.io.netcdf import read_dataset, write_dataset
     from softcell.io.video import render, track
+    from softcell.workflows.ensemble import plan
 
     v = design.video
     folder = out / "video"

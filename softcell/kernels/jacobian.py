@@ -29,8 +29,8 @@ import math
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.core.config import JIT
-from softcell.core.kernels.spectral import AXES
+from softcell.config import JIT, JIT_COMPOSED
+from softcell.kernels.spectral import AXES
 
 #: Blocks nonzero at no more than this many points are transformed by direct sums, not FFTs.
 SPARSE_POINTS = 48
@@ -226,7 +226,7 @@ def make_fd_hessian(partials):
     pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
     """
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus,
                    pose_tmp, hww, hwp, hpp):
         n = w.shape[1]
@@ -299,13 +299,13 @@ def compose_hessians(terms) -> object:
     if len(lines) == 1:
         lines.append("    pass")
     exec(compile("\n".join(lines) + "\n", "<softcell composed hessians>", "exec"), namespace)
-    return njit(nogil=True)(namespace["total_hessian"])
+    return njit(**JIT_COMPOSED)(namespace["total_hessian"])
 
 
 def make_fd_drive_jacobian(drive):
     """d drive / d pose by central differences of the drive kernel (steps in cm, cm, rad)."""
 
-    @njit(nogil=True)
+    @njit(**JIT_COMPOSED)
     def drive_jacobian(phase, datum, pose, context, drive_coefficients, steps, pose_tmp,
                        plus, minus, out):
         for d in range(3):

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from softcell._version import __version__
-from softcell.core.config import CHECKPOINT_EVERY
+from softcell.config import CHECKPOINT_EVERY
 from softcell.core.engine import (
     Model,
     Record,
@@ -41,10 +41,10 @@ from softcell.core.engine import (
     phase_at,
     sample_times,
 )
-from softcell.core.errors import Interrupted, SoftcellError
 from softcell.core.limits import check_run, check_seed, file_bytes
 from softcell.core.params import Parameters, ParameterSpec, expand_sweep
 from softcell.core.runconfig import RunConfig
+from softcell.errors import Interrupted, SoftcellError
 from softcell.io.files import atomic_write
 
 
@@ -196,9 +196,9 @@ def read_checkpoint(path: Path) -> dict[str, Any]:
 
 def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
                    components: dict[str, Any], extra_attrs: dict[str, Any] | None = None):
-    """The simulation Dataset (schema of ``softcell.io.schema``) of one realization."""
-    from softcell.core.kernels.spectral import resample
-    from softcell.io.schema import simulation_dataset
+    """The simulation Dataset (schema of ``softcell.core.schema``) of one realization."""
+    from softcell.core.schema import simulation_dataset
+    from softcell.kernels.spectral import resample
 
     nodes = int(model.params.stored_nodes)
     if model.has_membrane:
@@ -244,7 +244,7 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
     With ``stoppable`` (on a cluster), :data:`STOP_FILE` appearing beside the file makes the
     realization save its checkpoint and return None.
     """
-    from softcell.core.registry import PluginWarning, get_registry
+    from softcell.core.plugin.registry import PluginWarning, get_registry
     from softcell.io.netcdf import write_dataset
 
     with warnings.catch_warnings():  # the command that planned the run has warned already
@@ -281,7 +281,7 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
     parameter point (including what fits in memory, :func:`softcell.core.limits.check_run`),
     the integrator's own conditions, the seed and the number of realizations.
     """
-    from softcell.core.registry import get_registry
+    from softcell.core.plugin.registry import get_registry
 
     if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
         raise SoftcellError(f"realizations = {realizations!r} is not allowed: must be an "
@@ -334,8 +334,8 @@ def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
     SoftcellError
         If the file does not open or does not follow the schema.
     """
+    from softcell.core.schema import problems
     from softcell.io.netcdf import open_dataset
-    from softcell.io.schema import problems
 
     try:
         ds = open_dataset(path)  # lazily: the membrane is not read
@@ -633,7 +633,7 @@ def _where(unfinished: list[Task], finished: int, total: int) -> str:
 
 
 def _specs() -> list[ParameterSpec]:
-    from softcell.core.registry import get_registry
+    from softcell.core.plugin.registry import get_registry
 
     return list(get_registry().parameter_specs().values())
 

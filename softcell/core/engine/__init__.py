@@ -1,0 +1,33 @@
+"""The engine: the compiled model of a parameter point, the state of a realization, and the
+model evaluated with numpy for checks."""
+
+from softcell.core.engine.model import (
+    PARTIALS_ARGS,
+    Model,
+    build_integrator,
+    build_model,
+    compose_partials,
+)
+from softcell.core.engine.reference import (
+    explicit_decay_rate,
+    force_modes,
+    membrane_jacobian,
+    total_energy,
+)
+from softcell.core.engine.state import (
+    Record,
+    check_state,
+    circle_modes,
+    equilibrium_radius,
+    initial_state,
+    membrane_length,
+    phase_at,
+    sample_times,
+)
+from softcell.core.plugin.contracts import Stepper
+from softcell.errors import SimulationError
+
+__all__ = ["PARTIALS_ARGS", "Model", "Record", "SimulationError", "Stepper", "build_integrator",
+           "build_model", "check_state", "circle_modes", "compose_partials",
+           "equilibrium_radius", "explicit_decay_rate", "force_modes", "initial_state",
+           "membrane_jacobian", "membrane_length", "phase_at", "sample_times", "total_energy"]

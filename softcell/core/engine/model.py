@@ -1,0 +1,127 @@
+"""The compiled model of one parameter point: the chosen components composed into one.
+
+The energy terms' kernels are composed, by generated source, into one compiled function that
+sums their partial derivatives; an integrator compiles that, the spectral force assembly and
+the drive kernel into one stepper. The registry is consulted here, at set-up only.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from softcell.config import JIT_COMPOSED
+from softcell.core.params import Parameters
+from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Integrator
+from softcell.core.plugin.registry import get_registry
+
+PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
+                 "p0x, p0y, p1x, p1y, p2x, p2y, dpose")
+
+def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., None]:
+    """One compiled function that calls every term's partials kernel in turn.
+
+    Its signature is that of a term kernel, except that ``coefficients`` is a tuple holding
+    one coefficient array per term.
+    """
+    calls = [f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
+             for i in range(len(kernels))] or ["    pass"]
+    source = f"def total_partials({PARTIALS_ARGS}):\n" + "\n".join(calls) + "\n"
+    namespace: dict[str, object] = {f"k{i}": k for i, k in enumerate(kernels)}
+    exec(compile(source, "<softcell composed partials>", "exec"), namespace)
+    return njit(**JIT_COMPOSED)(namespace["total_partials"])
+
+@dataclass
+class Model:
+    """The compiled model of one parameter point: what an integrator composes into a stepper.
+
+    Attributes
+    ----------
+    params : Parameters
+    terms : list of EnergyTerm
+        Empty for a free bot (no membrane).
+    protocol : DrivingProtocol
+    partials : compiled function
+        Sum of the terms' partials kernels (see :func:`compose_partials`).
+    coefficients : tuple of float64 arrays
+        One per term.
+    drive : compiled function
+        The protocol's drive kernel; ``drive_coefficients`` its coefficients.
+    context : float64[3]
+        l0 (cm), bot semi-major and semi-minor axes (cm).
+    membrane_mobility : float
+        2 pi / (gamma_mem l0) (cm^2 N^-1 s^-1 per unit xi): dg_k/dt = membrane_mobility f_hat_k.
+    bot_mobility : float64[3]
+        1/gamma_T, 1/gamma_T (cm N^-1 s^-1) and 1/gamma_R (N^-1 cm^-1 s^-1).
+    """
+
+    params: Parameters
+    terms: list[EnergyTerm]
+    protocol: DrivingProtocol
+    partials: Callable[..., None]
+    coefficients: tuple[np.ndarray, ...]
+    drive: Callable[..., None]
+    drive_coefficients: np.ndarray
+    context: np.ndarray
+    membrane_mobility: float
+    bot_mobility: np.ndarray
+    nodes: int
+    cutoff: int
+    names: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def has_membrane(self) -> bool:
+        return bool(self.terms)
+
+    @property
+    def couples_bot(self) -> bool:
+        return any(t.couples_bot for t in self.terms)
+
+_PARTIALS_CACHE: dict[tuple[int, ...], Callable[..., None]] = {}
+
+def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
+                membrane: bool = True) -> Model:
+    """Instantiate the named components for ``params`` and compile their composition.
+
+    Parameters
+    ----------
+    params : Parameters
+        A validated parameter point (including the components' own parameters).
+    energy_terms : sequence of str
+        Names of registered energy terms.
+    protocol : str
+        Name of a registered driving protocol.
+    membrane : bool
+        False for a free bot: no membrane, no energy terms.
+    """
+    registry = get_registry()
+    terms = [registry.get("energy_term", n)(params) for n in energy_terms] if membrane else []
+    drive = registry.get("driving_protocol", protocol)(params)
+    kernels = [t.partials_kernel() for t in terms]
+    key = tuple(id(k) for k in kernels)
+    if key not in _PARTIALS_CACHE:
+        _PARTIALS_CACHE[key] = compose_partials(kernels)
+    coefficients = tuple(np.ascontiguousarray(t.coefficients()) for t in terms)
+    if not coefficients:
+        coefficients = (np.zeros(1),)
+    l0 = params.membrane_length
+    return Model(
+        params=params, terms=terms, protocol=drive, partials=_PARTIALS_CACHE[key],
+        coefficients=coefficients, drive=drive.drive_kernel(),
+        drive_coefficients=np.ascontiguousarray(drive.coefficients()),
+        context=np.array([l0, float(params.bot_semi_major), float(params.bot_semi_minor)]),
+        membrane_mobility=2 * math.pi / (float(params.membrane_friction) * l0),
+        bot_mobility=np.array([1 / float(params.bot_friction), 1 / float(params.bot_friction),
+                               1 / float(params.bot_rotational_friction)]),
+        nodes=int(params.nodes), cutoff=int(params.cutoff),
+        names={"energy_terms": list(energy_terms) if membrane else [],
+               "driving_protocol": protocol},
+    )
+
+def build_integrator(name: str, params: Parameters) -> Integrator:
+    """Instantiate the named integrator (its ``check`` runs on ``params``)."""
+    return get_registry().get("integrator", name)(params)

@@ -1,0 +1,120 @@
+"""The state of one realization: its initial condition, its sampling grid, its checks.
+
+The membrane is held as its Fourier modes g_k, |k| <= Lc (complex128[2 Lc + 1], cm;
+``modes[j]`` is g_{j - Lc}) and the bot as its pose (x, y in cm, heading in rad); see
+``docs/model.md``, "State and units".
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from softcell.config import BLOWUP_CHECK_POINTS, BLOWUP_LENGTH_FRACTION
+from softcell.core.params import Parameters
+from softcell.core.plugin.contracts import Schedule
+from softcell.errors import SimulationError
+
+if TYPE_CHECKING:
+    from softcell.core.engine.model import Model
+
+def equilibrium_radius(params: Parameters) -> float:
+    """Radius (cm) of the force-free circle: the root near l0 / 2 pi of
+    4 pi alpha l0 R^3 - 2 alpha l0^2 R^2 - k = 0 (SPEC section 3; the paper's cubic has a typo).
+    """
+    l0, alpha, k = params.membrane_length, float(params.tension), float(params.bending_stiffness)
+    roots = np.roots([4 * math.pi * alpha * l0, -2 * alpha * l0**2, 0.0, -k])
+    real = roots[np.abs(roots.imag) < 1e-9 * abs(roots).max()].real
+    return float(real[np.argmin(np.abs(real - l0 / (2 * math.pi)))])
+
+def circle_modes(radius: float, cutoff: int, center: complex = 0j) -> np.ndarray:
+    """Fourier modes (complex128[2 cutoff + 1], cm) of a circle z = center + radius e^{i xi}."""
+    modes = np.zeros(2 * cutoff + 1, dtype=np.complex128)
+    modes[cutoff] = center
+    modes[cutoff + 1] = radius
+    return modes
+
+def sample_times(params: Parameters) -> np.ndarray:
+    """The sampling grid (s): every ``sample_every`` before ``sample_switch``, then every
+    ``sample_every_late``, up to and including ``duration`` where it falls on the grid."""
+    duration, early = float(params.duration), float(params.sample_every)
+    late, switch = float(params.sample_every_late), float(params.sample_switch)
+    first_end = min(switch, duration)
+    n_early = int(math.floor(first_end / early * (1 + 1e-12))) + 1
+    times = np.arange(n_early) * early
+    if switch < duration:
+        times = times[times < switch]
+        n_late = int(math.floor((duration - switch) / late * (1 + 1e-12))) + 1
+        times = np.concatenate([times, switch + np.arange(n_late) * late])
+    return times
+
+def phase_at(schedule: Schedule, times: np.ndarray) -> np.ndarray:
+    """Phase code (int8) active at each time (s): the last phase started at or before it."""
+    index = np.searchsorted(schedule.start, times, side="right") - 1
+    return schedule.phase[np.clip(index, 0, None)]
+
+def membrane_length(modes: np.ndarray, points: int = 256) -> float:
+    """Length (cm) of the curve with these Fourier modes, by the trapezoidal rule (spectrally
+    accurate for a trigonometric polynomial)."""
+    zp = (1j * modes) @ _derivative_basis((modes.size - 1) // 2, points)
+    return float(2 * np.pi * np.abs(zp).mean())
+
+@functools.lru_cache(maxsize=8)
+def _derivative_basis(lc: int, points: int) -> np.ndarray:
+    """k e^{i k xi_n} for k = -lc..lc (rows) at ``points`` equally spaced xi_n (columns)."""
+    k = np.arange(-lc, lc + 1)
+    xi = 2 * np.pi * np.arange(points) / points
+    return k[:, None] * np.exp(1j * np.outer(k, xi))
+
+@dataclass
+class Record:
+    """What a realization produced, before it becomes a Dataset."""
+
+    times: np.ndarray
+    modes: np.ndarray  # complex128[T, 2 Lc + 1]
+    pose: np.ndarray  # float64[T, 3]
+    phase: np.ndarray  # int8[T]
+    state: dict[str, np.ndarray] | None = None  # the integrator's state after the last sample
+
+def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
+                times: np.ndarray | None = None, modes: np.ndarray | None = None,
+                pose: np.ndarray | None = None) -> None:
+    """Raise :class:`SimulationError` on a non-finite value or a membrane length off by more
+    than BLOWUP_LENGTH_FRACTION of l0, naming the time, the realization and the quantity.
+
+    ``times``, ``modes`` and ``pose`` (float64[K], complex128[K, 2 Lc + 1], float64[K, 3]), if
+    given, are the samples recorded since the last check, which are checked instead of the
+    state.
+    """
+    if times is None:
+        times, modes, pose = state["time"], state["modes"][None], state["pose"][None]
+    for name, values in (("modes", modes), ("pose", pose)):
+        bad = ~np.all(np.isfinite(values), axis=-1)
+        if bad.any():
+            t = float(times[np.argmax(bad)])
+            raise SimulationError(f"realization {realization}: non-finite {name} at t = {t:g} s "
+                                  "(the run blew up; reduce dt or tighten the tolerances)")
+    if model.has_membrane:
+        l0 = model.params.membrane_length
+        lengths = 2 * np.pi * np.abs((1j * modes) @ _derivative_basis(
+            model.cutoff, BLOWUP_CHECK_POINTS)).mean(axis=-1)
+        bad = np.abs(lengths / l0 - 1) > BLOWUP_LENGTH_FRACTION
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise SimulationError(
+                f"realization {realization}: membrane length {lengths[i]:.6g} cm at "
+                f"t = {times[i]:g} s is off l0 = {l0:.6g} cm by more than "
+                f"{BLOWUP_LENGTH_FRACTION:.0%}")
+
+def initial_state(model: Model, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray,
+                                                                     Schedule]:
+    """Draw the heading and the schedule (in that order) and set up the membrane at rest:
+    the equilibrium circle centred on the bot (SPEC section 5)."""
+    heading = model.protocol.initial_heading(rng)
+    schedule = model.protocol.schedule(rng, float(model.params.duration))
+    radius = equilibrium_radius(model.params) if model.has_membrane else 0.0
+    return circle_modes(radius, model.cutoff), np.array([0.0, 0.0, heading]), schedule

@@ -1,0 +1,1 @@
+"""Plugin machinery: hook specifications, component contracts and the registry."""

@@ -1,0 +1,2 @@
+"""Orchestration: ensembles with files, checkpoints and dask; the whole paper; the experimental
+pipeline; findings and the report."""
