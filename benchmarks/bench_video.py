@@ -20,8 +20,10 @@ def rows() -> list[dict[str, object]]:
     import cv2
 
     from softcell.core.runconfig import RunConfig
+    from softcell.core.tracking import Tracker
     from softcell.io.netcdf import read_dataset
-    from softcell.io.video import Tracker, render, track
+    from softcell.io.render import render
+    from softcell.io.video import track
     from softcell.workflows.ensemble import simulate
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -162,7 +162,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from softcell.core.schema import validate
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
-    from softcell.io.video import render
+    from softcell.io.render import render
 
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     ds = open_inputs([args.input])

@@ -348,7 +348,7 @@ def test_a_full_disk_is_named_and_leaves_nothing(world, small_disk, capsys, monk
     assert main(["figures", str(world / "an.nc"), "-o", str(small_disk / "figs")]) == 2
     assert "no space left on device" in capsys.readouterr().err
     # Video: the writer never says; the frames read back do.
-    import softcell.io.video as video
+    import softcell.io.render as video
 
     monkeypatch.setattr(video, "DISK_CHECK_EVERY", 10**9)
     assert main(["render", str(world / "sim"), "--point", "radius=0", "--px-per-cm", "40",

@@ -8,7 +8,8 @@ import softcell
 from softcell.cli import main
 from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
-from softcell.io.video import FLAGS, render, track
+from softcell.io.render import render
+from softcell.io.video import FLAGS, track
 from softcell.workflows.ensemble import simulate
 
 # A coarse membrane (cutoff 4, stable at dt = 1e-5 s) keeps the simulation cheap; the

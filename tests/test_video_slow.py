@@ -10,7 +10,8 @@ import pytest
 
 import softcell
 from softcell.core.runconfig import RunConfig
-from softcell.io.video import render, track
+from softcell.io.render import render
+from softcell.io.video import track
 from softcell.workflows.ensemble import simulate
 
 pytestmark = pytest.mark.slow

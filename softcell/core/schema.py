@@ -26,6 +26,9 @@ PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN = -1, 0, 1
 PHASE_FLAGS = np.array([PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN], dtype=np.int8)
 PHASE_MEANINGS = "unknown tumble run"
 
+#: tracking_flag values of a tracked video, by meaning.
+TRACKING_FLAGS = {"ok": 0, "membrane_lost": 1, "bot_lost": 2, "both_lost": 3}
+
 
 @dataclass(frozen=True)
 class VariableSpec:

@@ -304,7 +304,8 @@ def experimental_pipeline(out: Path, design: Design, seed: int, progress: bool =
     """
     from softcell.core.analysis import analyze
     from softcell.io.netcdf import read_dataset, write_dataset
-    from softcell.io.video import render, track
+    from softcell.io.render import render
+    from softcell.io.video import track
     from softcell.workflows.ensemble import plan
 
     v = design.video
