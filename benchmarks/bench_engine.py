@@ -30,7 +30,7 @@ def explicit_step(radius: float, protocol: str, warmup: float, span: float, seed
     step and simulated seconds per wall second."""
     from softcell.core.engine import build_integrator, build_model, initial_state
     from softcell.core.params import Parameters
-    from softcell.workflows.ensemble import realization_rng
+    from softcell.core.realization import realization_rng
 
     params = Parameters({"radius": radius, "duration": warmup + span})
     model = build_model(params, ["bending", "tension", "contact"], protocol)

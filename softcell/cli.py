@@ -17,8 +17,9 @@ from typing import Any, NoReturn
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
-from softcell.core.runconfig import RunConfig, load_config
+from softcell.core.runconfig import RunConfig
 from softcell.errors import SchemaError, SoftcellError
+from softcell.io.config import load_config
 
 
 class _Parser(argparse.ArgumentParser):

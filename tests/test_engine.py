@@ -68,6 +68,7 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]
 
+    import softcell.core.realization as realization
     import softcell.workflows.ensemble as ensemble
 
     calls = {"n": 0}
@@ -82,7 +83,7 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
         return original(*args, **kwargs)
 
     monkeypatch.setattr(ensemble, "run_realization", interrupted)
-    monkeypatch.setattr(ensemble, "SAMPLES_PER_CALL", 1)
+    monkeypatch.setattr(realization, "SAMPLES_PER_CALL", 1)
     with pytest.raises(KeyboardInterrupt):
         simulate(config, tmp_path / "resumed", realizations=1, seed=2, progress=False,
                  checkpoint_every=0.0)
@@ -107,7 +108,7 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
     stepper = build_integrator("explicit_euler", params).build(model)
     model.membrane_mobility *= 1e4
-    from softcell.workflows.ensemble import realization_rng, run_realization
+    from softcell.core.realization import realization_rng, run_realization
 
     with pytest.raises(SimulationError, match=r"realization 7: (non-finite modes|membrane length)"
                                               r".* at t = [0-9.e-]+ s"):

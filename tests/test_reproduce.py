@@ -10,7 +10,7 @@ import xarray as xr
 import softcell
 from softcell.cli import main
 from softcell.errors import SoftcellError
-from softcell.workflows.report import findings
+from softcell.workflows.findings import findings
 from softcell.workflows.reproduce import Design, VideoDesign, reproduce
 
 TINY = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0, discard=5.0,

@@ -17,11 +17,11 @@ from softcell.core.engine import (
 from softcell.core.params import MODEL_PARAMETERS, Parameters
 from softcell.core.plugin.contracts import EnergyTerm
 from softcell.core.plugin.registry import get_registry
+from softcell.core.realization import realization_rng
 from softcell.kernels.jacobian import make_fd_hessian
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
 from softcell.testing import registered
-from softcell.workflows.ensemble import realization_rng
 
 TERMS = ["bending", "tension", "contact"]
 REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"

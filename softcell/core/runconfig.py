@@ -1,4 +1,4 @@
-"""Run configuration: parameter values (possibly swept) and the chosen components, from TOML.
+"""Run configuration: parameter values (possibly swept) and the chosen components.
 
 A configuration file has up to three tables::
 
@@ -22,11 +22,8 @@ Values are in the units of the parameter table (``softcell params`` prints it).
 from __future__ import annotations
 
 import dataclasses
-import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from softcell.core.params import ParameterSpec, suggest
@@ -85,38 +82,31 @@ class RunConfig:
         return list(get_registry().parameter_specs().values())
 
 
-def load_config(path: str | os.PathLike[str]) -> RunConfig:
-    """Read a TOML run configuration.
+def config_from_mapping(data: dict[str, Any], source: object = "configuration") -> RunConfig:
+    """A run configuration from the tables of a TOML document (``source`` names it in errors).
 
     Raises
     ------
     ConfigError
-        For a missing file, bad TOML, an unknown table or key (with a suggestion), or a value
-        of the wrong type. Parameter values are validated later, by :class:`Parameters`.
+        For an unknown table or key (with a suggestion), or a value of the wrong type.
+        Parameter values are validated later, by :class:`Parameters`.
     """
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"no such configuration file: {path}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
     for section, value in data.items():
         if section not in SECTIONS:
-            raise ConfigError(f"{path}: unknown table [{section}]{suggest(section, SECTIONS)}; "
+            raise ConfigError(f"{source}: unknown table [{section}]{suggest(section, SECTIONS)}; "
                               f"tables: {', '.join(SECTIONS)}")
         if not isinstance(value, dict):
-            raise ConfigError(f"{path}: {section} must be a table, [{section}]")
+            raise ConfigError(f"{source}: {section} must be a table, [{section}]")
     components = dict(data.get("components", {}))
     for kind in components:
         if kind not in DEFAULT_COMPONENTS:
-            raise ConfigError(f"{path}: unknown component kind {kind!r}"
+            raise ConfigError(f"{source}: unknown component kind {kind!r}"
                               f"{suggest(kind, DEFAULT_COMPONENTS)}")
     run = dict(data.get("run", {}))
     for key, value in run.items():
         if key not in RUN_KEYS:
-            raise ConfigError(f"{path}: unknown [run] key {key!r}{suggest(key, RUN_KEYS)}")
+            raise ConfigError(f"{source}: unknown [run] key {key!r}{suggest(key, RUN_KEYS)}")
         if not isinstance(value, RUN_KEYS[key]) or isinstance(value, bool):
-            raise ConfigError(f"{path}: [run] {key} = {value!r} must be an integer")
+            raise ConfigError(f"{source}: [run] {key} = {value!r} must be an integer")
     return RunConfig(parameters=dict(data.get("parameters", {})),
                      components={**DEFAULT_COMPONENTS, **components}, run=run)

@@ -26,6 +26,15 @@ PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN = -1, 0, 1
 PHASE_FLAGS = np.array([PHASE_UNKNOWN, PHASE_TUMBLE, PHASE_RUN], dtype=np.int8)
 PHASE_MEANINGS = "unknown tumble run"
 
+#: Stop/go labels of a speed series (the analysis' ``stopgo`` variable, CF flags).
+STOPGO_UNKNOWN, STOP, GO = -1, 0, 1
+STOPGO_FLAGS = np.array([STOPGO_UNKNOWN, STOP, GO], dtype=np.int8)
+STOPGO_MEANINGS = "unknown stop go"
+
+#: Coupling regimes of a parameter point (the analysis' ``regime`` variable, CF flags).
+REGIMES = {"unknown": -1, "coupled": 0, "intermediate": 1, "decoupled": 2}
+REGIME_NAMES = {code: name for name, code in REGIMES.items()}
+
 #: tracking_flag values of a tracked video, by meaning.
 TRACKING_FLAGS = {"ok": 0, "membrane_lost": 1, "bot_lost": 2, "both_lost": 3}
 

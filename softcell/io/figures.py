@@ -28,7 +28,6 @@ from softcell.io.files import atomic_files
 
 #: Background colour of each regime (``regime`` flag value), as in the paper.
 REGIME_COLORS = {0: "#b39ddb", 1: "#f8bbd0", 2: "#a5d6a7"}
-REGIME_NAMES = {-1: "unknown", 0: "coupled", 1: "intermediate", 2: "decoupled"}
 SIM_COLOR, EXP_COLOR = "#00acc1", "#fb8c00"  # cyan circles, orange triangles (Fig. 3c)
 FORMATS = ("png", "pdf")
 

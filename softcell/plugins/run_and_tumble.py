@@ -17,8 +17,8 @@ from softcell.config import JIT
 from softcell.core.params import MODEL_PARAMETERS as P
 from softcell.core.plugin.contracts import DrivingProtocol, Schedule
 from softcell.core.plugin.hookspecs import hookimpl
-
-TUMBLE, RUN = 0, 1
+from softcell.core.schema import PHASE_RUN as RUN
+from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 
 
 def alternating_schedule(rng: np.random.Generator, duration: float, shortest: float,

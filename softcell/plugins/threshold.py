@@ -8,13 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from softcell.core.params import ParameterSpec
+from softcell.core.analysis.stopgo import THRESHOLD
 from softcell.core.plugin.contracts import StopGoDetector
 from softcell.core.plugin.hookspecs import hookimpl
-
-THRESHOLD = ParameterSpec("threshold", 0.03, "cm s-1",
-                          "speed below which a sample is stop (0.3 for experiments)",
-                          minimum=0.0)
+from softcell.core.schema import STOPGO_UNKNOWN
 
 
 class Threshold(StopGoDetector):
@@ -27,7 +24,7 @@ class Threshold(StopGoDetector):
     def label(self, speed: np.ndarray, interval: float) -> np.ndarray:
         speed = np.asarray(speed, dtype=np.float64)
         labels = (speed >= float(self.params["threshold"])).astype(np.int8)
-        labels[np.isnan(speed)] = -1
+        labels[np.isnan(speed)] = STOPGO_UNKNOWN
         return labels
 
 

@@ -20,8 +20,9 @@ from softcell.core.engine import (
 )
 from softcell.core.params import Parameters
 from softcell.core.plugin.registry import get_registry
-from softcell.plugins.run_and_tumble import RUN, TUMBLE
-from softcell.workflows.ensemble import run_realization
+from softcell.core.realization import run_realization
+from softcell.core.schema import PHASE_RUN as RUN
+from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 
 #: The model of the comparisons: the paper's membrane and protocol.
 TERMS = ("bending", "tension", "contact")
@@ -52,7 +53,7 @@ def parameters(radius: float, duration: float, **extra: object) -> Parameters:
 
 def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
     """Run realization 0 of point 0 with root ``seed`` (the ensemble's stream) and time it."""
-    from softcell.workflows.ensemble import realization_rng
+    from softcell.core.realization import realization_rng
 
     model = build_model(params, TERMS, PROTOCOL)
     stepper = build_integrator(integrator, params).build(model)

@@ -17,7 +17,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import time
 import warnings
 import zipfile
 from collections.abc import Callable, Iterable, Iterator
@@ -30,19 +29,10 @@ import numpy as np
 
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.engine import (
-    Model,
-    Record,
-    Stepper,
-    build_integrator,
-    build_model,
-    check_state,
-    initial_state,
-    phase_at,
-    sample_times,
-)
+from softcell.core.engine import Model, Stepper, build_integrator, build_model, sample_times
 from softcell.core.limits import check_run, check_seed, file_bytes
 from softcell.core.params import Parameters, ParameterSpec, expand_sweep
+from softcell.core.realization import Saved, realization_rng, record_dataset, run_realization
 from softcell.core.runconfig import RunConfig
 from softcell.errors import Interrupted, SoftcellError
 from softcell.io.files import atomic_write
@@ -87,89 +77,27 @@ def _request(parameters: dict[str, Any], components: dict[str, Any], seed: Any,
             "seed": seed, "spawn key": spawn_key, "softcell version": version}
 
 
-def realization_rng(seed: int, point: int, realization: int) -> np.random.Generator:
-    """The Generator of one realization: SeedSequence(seed, spawn_key=(point, realization))."""
-    return np.random.Generator(np.random.PCG64(
-        np.random.SeedSequence(seed, spawn_key=(point, realization))))
+class FileCheckpoint:
+    """The checkpoint of one realization in a file (``.<name>.ckpt.npz`` beside its result),
+    valid only for the request it was made for (``fingerprint``, the task's request as JSON)."""
 
+    def __init__(self, path: Path, fingerprint: str):
+        self.path, self.fingerprint = path, fingerprint
 
-#: Samples handed to the stepper per call (progress, checks and checkpoints happen between
-#: calls): 1 s of simulated time at the paper's early sampling.
-SAMPLES_PER_CALL = 100
-
-
-def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
-                    label: object = 0, checkpoint: Path | None = None,
-                    fingerprint: str = "", checkpoint_every: float = CHECKPOINT_EVERY,
-                    progress: Callable[[float], None] | None = None,
-                    stop: Callable[[], bool] | None = None) -> Record:
-    """Integrate one realization over the sampling grid of ``model.params``.
-
-    Parameters
-    ----------
-    checkpoint : Path, optional
-        Where to save the state every ``checkpoint_every`` wall seconds (and when
-        interrupted), and to resume from if a checkpoint made for the same ``fingerprint``
-        (the task's request, as JSON) exists; one made for another request is an error.
-    progress : callable, optional
-        Called with the simulated seconds advanced since its last call.
-    stop : callable, optional
-        Asked between chunks of samples; True stops the run as Ctrl-C does.
-
-    Raises
-    ------
-    Interrupted
-        On Ctrl-C (a ``KeyboardInterrupt``) or ``stop``, after saving the checkpoint of the
-        last finished chunk; its message says where the run stopped.
-    """
-    times = sample_times(model.params)
-    modes, pose, schedule = initial_state(model, rng)
-    state = stepper.start(modes, pose, schedule)
-    rec_modes = np.empty((times.size, modes.size), dtype=np.complex128)
-    rec_pose = np.empty((times.size, 3))
-    first = 0
-    if checkpoint is not None and checkpoint.exists():
-        saved = read_checkpoint(checkpoint)
-        if saved["request"] != fingerprint:
-            raise SoftcellError(f"checkpoint {checkpoint} was made for another request; "
+    def load(self) -> Saved | None:
+        if not self.path.exists():
+            return None
+        data = read_checkpoint(self.path)
+        if data["request"] != self.fingerprint:
+            raise SoftcellError(f"checkpoint {self.path} was made for another request; "
                                 "remove it or rerun with --overwrite")
-        first = int(saved["next_sample"])
-        rec_modes[:first], rec_pose[:first] = saved["modes_record"], saved["pose_record"]
-        state = {k.removeprefix("state_"): v.copy() for k, v in saved.items()
-                 if k.startswith("state_")}
-        if progress:
-            progress(float(times[first - 1]))
-    last_save = time.monotonic()
-    if first == 0:
-        check_state(state, model, label)
-        rec_modes[0], rec_pose[0] = state["modes"], state["pose"]
-        first = 1
-    done, done_state = first, _copy_state(state)  # the last consistent point
-    try:
-        for i in range(first, times.size, SAMPLES_PER_CALL):
-            j = min(i + SAMPLES_PER_CALL, times.size)
-            rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
-            check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
-            done, done_state = j, _copy_state(state)
-            if progress:
-                progress(float(times[j - 1] - times[i - 1]))
-            if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
-                _save_checkpoint(checkpoint, fingerprint, j, rec_modes, rec_pose, state)
-                last_save = time.monotonic()
-            if stop is not None and stop():
-                raise KeyboardInterrupt
-    except KeyboardInterrupt:
-        # The stepper may have been stopped half way through a chunk: save what is whole.
-        if checkpoint is not None:
-            _save_checkpoint(checkpoint, fingerprint, done, rec_modes, rec_pose, done_state)
-        raise Interrupted(f"interrupted at t = {times[done - 1]:.2f} s of {label}"
-                          + ("; rerun the same command to resume" if checkpoint else "")
-                          ) from None
-    return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
+        return Saved(int(data["next_sample"]), data["modes_record"], data["pose_record"],
+                     {k.removeprefix("state_"): v for k, v in data.items()
+                      if k.startswith("state_")})
 
-
-def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    return {k: np.array(v, copy=True) for k, v in state.items()}
+    def save(self, saved: Saved) -> None:
+        _save_checkpoint(self.path, self.fingerprint, saved.next_sample, saved.modes_record,
+                         saved.pose_record, saved.state)
 
 
 def _save_checkpoint(path: Path, request: str, next_sample: int, rec_modes: np.ndarray,
@@ -192,27 +120,6 @@ def read_checkpoint(path: Path) -> dict[str, Any]:
                             f"{type(exc).__name__}); rerun with --overwrite to start that "
                             "realization again") from None
     return data
-
-
-def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
-                   components: dict[str, Any], extra_attrs: dict[str, Any] | None = None):
-    """The simulation Dataset (schema of ``softcell.core.schema``) of one realization."""
-    from softcell.core.schema import simulation_dataset
-    from softcell.kernels.spectral import resample
-
-    nodes = int(model.params.stored_nodes)
-    if model.has_membrane:
-        mx, my = resample(record.modes, nodes)
-        cell = record.modes[:, model.cutoff]  # g_0: the mean of the membrane points
-    else:
-        mx = my = np.full((record.times.size, nodes), np.nan)
-        cell = np.full(record.times.size, np.nan + 0j)
-    return simulation_dataset(
-        record.times, np.array([realization]), membrane_x=mx[None], membrane_y=my[None],
-        cell_x=cell.real[None], cell_y=cell.imag[None], bot_x=record.pose[None, :, 0],
-        bot_y=record.pose[None, :, 1], bot_angle=record.pose[None, :, 2],
-        bot_phase=record.phase[None], parameters=model.params, seed=seed,
-        components=components, extra_attrs=extra_attrs)
 
 
 _BUILT: dict[str, tuple[Model, Stepper]] = {}
@@ -257,7 +164,7 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
     try:
         record = run_realization(
             model, stepper, realization_rng(task.seed, task.point, task.realization),
-            label=task.name, checkpoint=checkpoint, fingerprint=_canonical(task.request(specs)),
+            label=task.name, checkpoint=FileCheckpoint(checkpoint, _canonical(task.request(specs))),
             checkpoint_every=checkpoint_every, progress=progress,
             stop=stop_file.exists if stoppable else None)
     except Interrupted:

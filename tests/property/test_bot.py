@@ -14,8 +14,8 @@ from softcell.core.freebot import (
     turn_correlation,
 )
 from softcell.core.params import Parameters
+from softcell.core.realization import realization_rng, run_realization
 from softcell.kernels.ellipse import signed_distance
-from softcell.workflows.ensemble import realization_rng, run_realization
 
 
 def brute_distance(px, py, a, b):

@@ -6,8 +6,9 @@ import pytest
 import softcell
 from softcell.core.engine import build_integrator, build_model, membrane_length
 from softcell.core.params import Parameters
+from softcell.core.realization import realization_rng, run_realization
 from softcell.core.runconfig import RunConfig
-from softcell.workflows.ensemble import realization_rng, run_realization, simulate
+from softcell.workflows.ensemble import simulate
 
 pytestmark = pytest.mark.slow
 

@@ -7,10 +7,12 @@ analysis file (``softcell_analysis_options``) so that any analysis can be redone
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Mapping
 from typing import Any
 
+from softcell.core.analysis.stopgo import THRESHOLD
 from softcell.core.params import ParameterSpec, suggest
 from softcell.errors import ConfigError
 
@@ -34,9 +36,9 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {s.name: s for s in (
                   "sampling segments whose complete phases enter the stop/go statistics: "
                   "'all', or only the 'finest' (a coarse interval misses short phases)",
                   kind=str, choices=("all", "finest")),
-    ParameterSpec("threshold", None, "cm s-1",
-                  "stop/go speed threshold (default: 0.3 for tracked videos, the detector's "
-                  "0.03 for simulations)", minimum=0.0, minimum_inclusive=True),
+    dataclasses.replace(THRESHOLD, default=None, long_name=(
+        "stop/go speed threshold (default: 0.3 for tracked videos, the detector's "
+        "0.03 for simulations)"), minimum_inclusive=True),
     ParameterSpec("threshold_shift", 0.1, "cm s-1",
                   "the threshold is also moved by -/+ this to show how the means move",
                   minimum=0.0, minimum_inclusive=True),

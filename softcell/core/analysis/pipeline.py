@@ -29,12 +29,12 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
+from softcell.core.schema import REGIMES, STOPGO_FLAGS, STOPGO_MEANINGS
 from softcell.errors import SoftcellError
 
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
 #: Regime flags of the ``regime`` variable.
-REGIMES = {"unknown": -1, "coupled": 0, "intermediate": 1, "decoupled": 2}
 #: Scaling-collapse variants (SPEC section 6): MSD * R^a against lag * R^b.
 COLLAPSE_VARIANTS = ((1 / 3, 1.0), (1 / 3, -1.0), (-1 / 3, 1.0), (-1 / 3, -1.0))
 COLLAPSE_GRID = 50
@@ -195,7 +195,7 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     origin = ds.attrs.get("softcell_origin", "simulation")
     threshold = opts["threshold"]
     if threshold is None and origin == "tracking" and opts["detector"] == "threshold":
-        threshold = 0.3
+        threshold = stopgo.EXPERIMENT_THRESHOLD
     detector = _detector(opts["detector"], threshold)
     threshold = detector.params.get("threshold", threshold)
     shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
@@ -364,7 +364,7 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     put("speed", (*B, "realization", "time"), speeds, "cm s-1",
         "speed, forward difference within a sampling segment")
     put("stopgo_label", (*B, "realization", "time"), labels, "1", "stop/go label",
-        flag_values=np.array([-1, 0, 1], dtype=np.int8), flag_meanings="unknown stop go")
+        flag_values=STOPGO_FLAGS, flag_meanings=STOPGO_MEANINGS)
     put("go_duration", (*B, "event"), durations[stopgo.GO], "s",
         "duration of a complete go phase, (n - 1) dt")
     put("stop_duration", (*B, "event"), durations[stopgo.STOP], "s",

@@ -14,10 +14,17 @@ import numpy as np
 from scipy import stats
 
 from softcell.core.analysis.series import segment_index, segments
+from softcell.core.params import ParameterSpec
 from softcell.core.plugin.contracts import StopGoDetector
+from softcell.core.schema import GO, STOP
 from softcell.kernels.runs import phases
 
-GO, STOP = 1, 0
+#: The paper's speed thresholds (cm/s): 0.03 for its simulations, 0.3 for its experiments.
+SIMULATION_THRESHOLD, EXPERIMENT_THRESHOLD = 0.03, 0.3
+#: The threshold detector's parameter (the analysis option ``threshold`` overrides it).
+THRESHOLD = ParameterSpec("threshold", SIMULATION_THRESHOLD, "cm s-1",
+                          "speed below which a sample is stop (0.3 for experiments)",
+                          minimum=0.0)
 #: Width of the bins of the PDFs of t / <t> (the paper's 0.25).
 PDF_BIN = 0.25
 

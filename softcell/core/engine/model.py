@@ -16,7 +16,7 @@ from numba import njit
 
 from softcell.config import JIT_COMPOSED
 from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Integrator
+from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Integrator, check_kernels
 from softcell.core.plugin.registry import get_registry
 
 PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
@@ -97,10 +97,17 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
         Name of a registered driving protocol.
     membrane : bool
         False for a free bot: no membrane, no energy terms.
+
+    Raises
+    ------
+    ContractError
+        When a component's kernel does not compile for its contract's signature.
     """
     registry = get_registry()
     terms = [registry.get("energy_term", n)(params) for n in energy_terms] if membrane else []
     drive = registry.get("driving_protocol", protocol)(params)
+    for component in (*terms, drive):
+        check_kernels(component, registry.origin(component.kind, component.name))
     kernels = [t.partials_kernel() for t in terms]
     key = tuple(id(k) for k in kernels)
     if key not in _PARTIALS_CACHE:

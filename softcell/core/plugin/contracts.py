@@ -18,11 +18,14 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 
 from softcell.core.params import ParameterSpec
+from softcell.errors import ContractError
 
 if TYPE_CHECKING:
     from softcell.core.params import Parameters
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+#: numba's type of the arrays the engine hands a kernel: C-contiguous float64 vectors.
+VECTOR = "float64[::1]"
 
 
 class Component(ABC):
@@ -47,6 +50,10 @@ class Component(ABC):
     name: ClassVar[str]
     description: ClassVar[str]
     parameters: ClassVar[tuple[ParameterSpec, ...]] = ()
+    #: The compiled kernels of the contract: the method returning each, and the numba
+    #: signature the engine calls it with (checked by :func:`check_kernels` when a model is
+    #: built, before any time step).
+    kernels: ClassVar[dict[str, str]] = {}
 
     def __init__(self, params: Parameters) -> None:
         self.check(params)
@@ -92,6 +99,11 @@ class EnergyTerm(Component):
     """
 
     kind = "energy_term"
+    kernels = {
+        "partials_kernel": f"void({', '.join([VECTOR] * 16)})",
+        "hessian_kernel": f"void({', '.join([VECTOR] * 9)}, float64[:, :, ::1], "
+                          "float64[:, :, ::1], float64[:, ::1])",
+    }
     #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
     couples_bot: ClassVar[bool] = False
     #: True if the density is a smooth function of gamma, gamma', gamma'' with no length
@@ -185,6 +197,7 @@ class DrivingProtocol(Component):
     """The bot's internal drive: a phase schedule and a force and torque in each phase (SPEC 5)."""
 
     kind = "driving_protocol"
+    kernels = {"drive_kernel": f"void(int8, float64, {', '.join([VECTOR] * 4)})"}
 
     @abstractmethod
     def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
@@ -289,3 +302,39 @@ CONTRACTS: dict[str, type[Component]] = {
     "softcell_integrators": Integrator,
     "softcell_stopgo_detectors": StopGoDetector,
 }
+
+
+def check_kernels(component: Component, origin: str) -> None:
+    """Compile each kernel of ``component`` for the signature its contract declares
+    (:attr:`Component.kernels`), so that a mismatch stops the run before any time step.
+
+    A kernel method returning None is skipped (the optional ``hessian_kernel``). Compiling a
+    kernel that is already compiled (or cached on disk) for that signature costs nothing.
+
+    Raises
+    ------
+    ContractError
+        One line naming ``origin`` (the distribution or module that registered the
+        component), the component, the kernel, the expected signature and numba's reason.
+    """
+    for method, signature in type(component).kernels.items():
+        kernel = getattr(component, method)()
+        if kernel is None:
+            continue
+        where = f"{origin}: {component.kind.replace('_', ' ')} {component.name!r}: {method}()"
+        if not callable(getattr(kernel, "compile", None)):
+            raise ContractError(f"{where} returned {kernel!r}, not a numba.njit function")
+        try:
+            kernel.compile(signature)
+        except Exception as exc:  # numba's TypingError, or TypeError for a wrong arity
+            raise ContractError(f"{where} does not compile for the contract's signature "
+                                f"{signature}: {_reason(exc)}") from None
+
+
+def _reason(exc: Exception) -> str:
+    """The informative part of numba's many-line message, on one line."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    lines = [line for line in lines if not line.startswith(("Failed in nopython mode",
+                                                            "During:", "<source missing"))]
+    text = " ".join(lines[:2]) or type(exc).__name__
+    return text if len(text) <= 300 else text[:297] + "..."

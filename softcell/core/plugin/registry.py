@@ -209,6 +209,12 @@ class Registry:
                               f"available: {have}")
         return table[name].component
 
+    def origin(self, kind: str, name: str) -> str:
+        """Where the component of ``kind`` named ``name`` came from (a distribution and its
+        entry point, or a built-in module)."""
+        self.get(kind, name)
+        return self._kind(kind)[name].origin
+
     def parameter_specs(self) -> dict[str, ParameterSpec]:
         """Every parameter declared by a registered component, by name."""
         return merge_specs(*(r.component.parameters for kind in self._components.values()

@@ -1,0 +1,145 @@
+"""One realization: the schedule, the stepper and the samples, as a Dataset.
+
+This is the engine's outer loop. It touches no file: where a long realization keeps its
+checkpoint is the caller's business, handed in as a :class:`Checkpoint` (the ensembles of
+:mod:`softcell.workflows.ensemble` keep one file per realization).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from softcell.config import CHECKPOINT_EVERY
+from softcell.core.engine.model import Model
+from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
+from softcell.core.plugin.contracts import Stepper
+from softcell.core.schema import simulation_dataset
+from softcell.errors import Interrupted
+from softcell.kernels.spectral import resample
+
+#: Samples handed to the stepper per call (progress, checks and checkpoints happen between
+#: calls): 1 s of simulated time at the paper's early sampling.
+SAMPLES_PER_CALL = 100
+
+
+def realization_rng(seed: int, point: int, realization: int) -> np.random.Generator:
+    """The Generator of one realization: SeedSequence(seed, spawn_key=(point, realization))."""
+    return np.random.Generator(np.random.PCG64(
+        np.random.SeedSequence(seed, spawn_key=(point, realization))))
+
+
+@dataclass
+class Saved:
+    """What a checkpoint holds: the samples recorded so far and the stepper's state."""
+
+    next_sample: int  # index of the first sample not yet recorded
+    modes_record: np.ndarray  # (next_sample, modes) complex, cm
+    pose_record: np.ndarray  # (next_sample, 3): x (cm), y (cm), angle (rad)
+    state: dict[str, np.ndarray]  # the stepper's state after sample next_sample - 1
+
+
+class Checkpoint(Protocol):
+    """Where a realization saves its progress and resumes from."""
+
+    def load(self) -> Saved | None:
+        """The saved progress, or None to start from the beginning."""
+
+    def save(self, saved: Saved) -> None:
+        """Keep ``saved`` (replacing what was kept before), all or nothing."""
+
+
+def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
+                    label: object = 0, checkpoint: Checkpoint | None = None,
+                    checkpoint_every: float = CHECKPOINT_EVERY,
+                    progress: Callable[[float], None] | None = None,
+                    stop: Callable[[], bool] | None = None) -> Record:
+    """Integrate one realization over the sampling grid of ``model.params``.
+
+    Parameters
+    ----------
+    checkpoint : Checkpoint, optional
+        Saved every ``checkpoint_every`` wall seconds (and when interrupted), and resumed from
+        when it holds progress.
+    progress : callable, optional
+        Called with the simulated seconds advanced since its last call.
+    stop : callable, optional
+        Asked between chunks of samples; True stops the run as Ctrl-C does.
+
+    Raises
+    ------
+    Interrupted
+        On Ctrl-C (a ``KeyboardInterrupt``) or ``stop``, after saving the checkpoint of the
+        last finished chunk; its message says where the run stopped.
+    """
+    times = sample_times(model.params)
+    modes, pose, schedule = initial_state(model, rng)
+    state = stepper.start(modes, pose, schedule)
+    rec_modes = np.empty((times.size, modes.size), dtype=np.complex128)
+    rec_pose = np.empty((times.size, 3))
+    first = 0
+    saved = checkpoint.load() if checkpoint is not None else None
+    if saved is not None:
+        first = saved.next_sample
+        rec_modes[:first], rec_pose[:first] = saved.modes_record, saved.pose_record
+        state = {k: v.copy() for k, v in saved.state.items()}
+        if progress:
+            progress(float(times[first - 1]))
+    last_save = time.monotonic()
+    if first == 0:
+        check_state(state, model, label)
+        rec_modes[0], rec_pose[0] = state["modes"], state["pose"]
+        first = 1
+
+    def keep(next_sample: int, kept_state: dict[str, np.ndarray]) -> None:
+        checkpoint.save(Saved(next_sample, rec_modes[:next_sample], rec_pose[:next_sample],
+                              kept_state))
+
+    done, done_state = first, _copy_state(state)  # the last consistent point
+    try:
+        for i in range(first, times.size, SAMPLES_PER_CALL):
+            j = min(i + SAMPLES_PER_CALL, times.size)
+            rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
+            check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
+            done, done_state = j, _copy_state(state)
+            if progress:
+                progress(float(times[j - 1] - times[i - 1]))
+            if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
+                keep(j, state)
+                last_save = time.monotonic()
+            if stop is not None and stop():
+                raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        # The stepper may have been stopped half way through a chunk: save what is whole.
+        if checkpoint is not None:
+            keep(done, done_state)
+        raise Interrupted(f"interrupted at t = {times[done - 1]:.2f} s of {label}"
+                          + ("; rerun the same command to resume" if checkpoint else "")
+                          ) from None
+    return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
+
+
+def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return {k: np.array(v, copy=True) for k, v in state.items()}
+
+
+def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
+                   components: dict[str, object], extra_attrs: dict[str, object] | None = None):
+    """The simulation Dataset (schema of :mod:`softcell.core.schema`) of one realization."""
+    nodes = int(model.params.stored_nodes)
+    if model.has_membrane:
+        mx, my = resample(record.modes, nodes)
+        cell = record.modes[:, model.cutoff]  # g_0: the mean of the membrane points
+    else:
+        mx = my = np.full((record.times.size, nodes), np.nan)
+        cell = np.full(record.times.size, np.nan + 0j)
+    return simulation_dataset(
+        record.times, np.array([realization]), membrane_x=mx[None], membrane_y=my[None],
+        cell_x=cell.real[None], cell_y=cell.imag[None], bot_x=record.pose[None, :, 0],
+        bot_y=record.pose[None, :, 1], bot_angle=record.pose[None, :, 2],
+        bot_phase=record.phase[None], parameters=model.params, seed=seed,
+        components=components, extra_attrs=extra_attrs)

@@ -1,0 +1,30 @@
+"""Run configurations from TOML files."""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+
+from softcell.core.runconfig import RunConfig, config_from_mapping
+from softcell.errors import ConfigError
+
+
+def load_config(path: str | os.PathLike[str]) -> RunConfig:
+    """Read a TOML run configuration (tables ``[parameters]``, ``[components]``, ``[run]``).
+
+    Raises
+    ------
+    ConfigError
+        For a missing file, bad TOML, an unknown table or key (with a suggestion), or a value
+        of the wrong type. Parameter values are validated later, by
+        :class:`softcell.Parameters`.
+    """
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"no such configuration file: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    return config_from_mapping(data, path)
