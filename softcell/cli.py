@@ -10,15 +10,15 @@ import argparse
 import math
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep
+from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
 from softcell.core.runconfig import RunConfig
-from softcell.errors import SchemaError, SoftcellError
+from softcell.errors import PluginWarning, SchemaError, SoftcellError
 from softcell.io.config import load_config
 
 
@@ -26,8 +26,27 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but a bad command line is one line on stderr (exit status 2), like every
     other bad input."""
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)  # --arena-sid is not --arena-side
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> NoReturn:
+        if message.startswith("unrecognized arguments: "):
+            flags = _option_strings(self)
+            given = message.removeprefix("unrecognized arguments: ").split()[0]
+            message += suggest(given.split("=")[0], flags)
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _option_strings(parser: argparse.ArgumentParser) -> list[str]:
+    """Every flag of ``parser`` and of its subcommands' parsers."""
+    flags = []
+    for action in parser._actions:
+        flags += action.option_strings
+        for sub in (getattr(action, "choices", None) or {}).values():
+            if isinstance(sub, argparse.ArgumentParser):
+                flags += _option_strings(sub)
+    return flags
 
 
 def _flag(name: str) -> str:
@@ -36,8 +55,9 @@ def _flag(name: str) -> str:
 
 def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec],
                          title: str = "model parameters",
-                         description: str = "override the defaults (SPEC section 2); a "
-                         "comma-separated list sweeps a parameter") -> None:
+                         description: str = "override the defaults (softcell params lists "
+                         "them; docs/model.md explains them); a comma-separated list sweeps a "
+                         "parameter") -> None:
     group = parser.add_argument_group(title, description)
     for spec in specs:
         unit = "" if spec.unit == "1" else f" [{spec.unit}]"
@@ -46,16 +66,31 @@ def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[Parame
                            help=f"{spec.long_name}{unit} (default {default})")
 
 
-def _add_component_flags(parser: argparse.ArgumentParser) -> None:
-    """Flags for the parameters that registered components declare beyond the model's
+def _add_component_flags(parser: argparse.ArgumentParser,
+                         specs: Sequence[ParameterSpec]) -> None:
+    """Flags for the parameters that the components in use declare beyond the model's
     (e.g. rodas4's --atol and --rtol)."""
+    _add_parameter_flags(parser, specs, "component parameters",
+                         "parameters of the components this run uses (integrator, protocol, "
+                         "energy terms, detector)")
+
+
+def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[ParameterSpec, str]]:
+    """The parameters beyond the model's that ``components`` (kind -> name or names; None for
+    every registered component) declare, by name, each with the first component declaring it
+    (``"integrator 'rodas4'"``)."""
     from softcell.core.plugin.registry import get_registry
 
-    specs = [s for name, s in get_registry().parameter_specs().items()
-             if name not in MODEL_PARAMETERS]
-    _add_parameter_flags(parser, specs, "component parameters",
-                         "parameters of the registered components (integrators, protocols, "
-                         "energy terms)")
+    registry = get_registry()
+    found: dict[str, tuple[ParameterSpec, str]] = {}
+    for entry in registry:
+        cls = entry.component
+        if components is None or _chosen(cls, components):
+            for spec in cls.parameters:
+                if spec.name not in MODEL_PARAMETERS:
+                    found.setdefault(spec.name, (spec, f"{cls.kind.replace('_', ' ')} "
+                                                      f"{cls.name!r}"))
+    return found
 
 
 def _flag_values(args: argparse.Namespace) -> dict[str, Any]:
@@ -121,12 +156,7 @@ def _cmd_params(args: argparse.Namespace) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from softcell.workflows.ensemble import simulate
 
-    config = _config(args)
-    components = {k: v for k, v in (("driving_protocol", args.protocol),
-                                    ("integrator", args.integrator)) if v}
-    if args.energy_terms:
-        components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]
-    config = config.updated(components=components)
+    config = _config(args).updated(components=_component_flags(args))
     run = config.run
     realizations = args.realizations if args.realizations is not None else run.get(
         "realizations", 1)
@@ -269,26 +299,25 @@ def _describe(ds: Any) -> str:
     return f"{ds.sizes['realization']} realization(s)" + (f" at {points}" if points else "")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``softcell`` command."""
-    parser = _Parser(
-        prog="softcell", description="Simulate, track and analyse a soft robotic cell.")
-    parser.add_argument("--version", action="version", version=f"softcell {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
-                                parser_class=_Parser)
+def _chosen(cls: type, components: dict[str, Any]) -> bool:
+    chosen = components.get("energy_terms" if cls.kind == "energy_term" else cls.kind)
+    return cls.name in chosen if isinstance(chosen, list) else cls.name == chosen
 
-    p = sub.add_parser("plugins", help="list every component by kind, with origin and parameters")
+
+def _add_plugins(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.set_defaults(func=_cmd_plugins)
 
-    p = sub.add_parser("params", help="validate and print the parameters of a configuration")
+
+def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
-    _add_component_flags(p)
+    _add_component_flags(p, specs)
     p.set_defaults(func=_cmd_params)
 
-    p = sub.add_parser("simulate", help="simulate an ensemble: parameter points x realizations")
+
+def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
-    p.add_argument("-o", "--output", type=Path, required=True,
+    p.add_argument("-o", "--output", type=Path, required=strict,
                    help="directory for the files, one per (parameter point, realization)")
     p.add_argument("--realizations", type=int, help="realizations per parameter point")
     p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
@@ -307,13 +336,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wall seconds between checkpoints of a running realization "
                         f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one")
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
-    _add_component_flags(p)
+    _add_component_flags(p, specs)
     p.set_defaults(func=_cmd_simulate)
 
+
+def _add_analyze(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     from softcell.core.analysis.options import ANALYSIS_OPTIONS
 
-    p = sub.add_parser("analyze", help="MSD, stop/go, fits and theory of simulated or tracked "
-                       "files, as one NetCDF file")
     p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT",
                    help="NetCDF files or directories of one sweep (softcell simulate / track)")
     p.add_argument("-o", "--output", type=Path, required=True, help="analysis file (.nc)")
@@ -321,10 +350,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="replace an existing file that is not a softcell analysis")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_parameter_flags(p, list(ANALYSIS_OPTIONS.values()), "analysis options",
-                         "SPEC section 6; stored in the output file")
+                         "see docs/analysis.md; stored in the output file")
     p.set_defaults(func=_cmd_analyze)
 
-    p = sub.add_parser("render", help="a top-view movie of one simulated realization")
+
+def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("input", type=Path, help="simulation file or sweep directory")
     p.add_argument("-o", "--output", type=Path, required=True,
                    help="video: .mkv/.avi (lossless, for tracking) or .mp4")
@@ -345,7 +375,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_render)
 
-    p = sub.add_parser("track", help="track a top-view video into the simulation schema")
+
+def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("video", type=Path)
     p.add_argument("-o", "--output", type=Path, required=True, help="tracked file (.nc)")
     p.add_argument("--overwrite", action="store_true",
@@ -360,8 +391,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
 
-    p = sub.add_parser("figures", help="the paper's figures (PNG and PDF) from an analysis of "
-                       "a radius sweep")
+
+def _add_figures(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("analysis", type=Path, help="analysis file of a radius sweep (.nc)")
     p.add_argument("-o", "--output", type=Path, required=True, help="directory for the figures")
     p.add_argument("--overwrite", action="store_true",
@@ -373,8 +404,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="analysis of a tracked video (the experiments' markers)")
     p.set_defaults(func=_cmd_figures)
 
-    p = sub.add_parser("reproduce", help="the paper end to end: simulate, analyze, render and "
-                       "track, figures, report")
+
+def _add_reproduce(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     design = p.add_mutually_exclusive_group()
     design.add_argument("--quick", action="store_true",
                         help="every radius, 5 realizations of 240 s (the default; minutes)")
@@ -386,9 +417,85 @@ def build_parser() -> argparse.ArgumentParser:
                         "version (or use a directory softcell did not make) instead of stopping")
     p.add_argument("--seed", type=int, default=0, help="root seed of every random stream")
     _add_cluster_flags(p, "local worker processes (default: every core)")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_reproduce)
+
+
+#: Each command: its one-line help and what adds its arguments. A command's arguments are
+#: built only when it runs, so ``softcell --version`` and ``--help`` import nothing heavy.
+COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
+    "plugins": ("list every component by kind, with origin and parameters", _add_plugins),
+    "params": ("validate and print the parameters of a configuration", _add_params),
+    "simulate": ("simulate an ensemble: parameter points x realizations", _add_simulate),
+    "analyze": ("MSD, stop/go, fits and theory of simulated or tracked files, as one NetCDF "
+                "file", _add_analyze),
+    "render": ("a top-view movie of one simulated realization", _add_render),
+    "track": ("track a top-view video into the simulation schema", _add_track),
+    "figures": ("the paper's figures (PNG and PDF) from an analysis of a radius sweep",
+                _add_figures),
+    "reproduce": ("the paper end to end: simulate, analyze, render and track, figures, report",
+                  _add_reproduce),
+}
+#: Commands whose flags include the parameters of the components in use.
+WITH_COMPONENTS = ("params", "simulate")
+
+
+def build_parser(command: str | None = None, *, strict: bool = True,
+                 specs: Sequence[ParameterSpec] = ()) -> argparse.ArgumentParser:
+    """The argument parser of the ``softcell`` command, with the arguments of ``command`` (of
+    every command when None); ``specs`` are the component parameters offered as flags, and a
+    parser that is not ``strict`` requires nothing (to read the component choice first)."""
+    parser = _Parser(prog="softcell", add_help=strict,
+                     description="Simulate, track and analyse a soft robotic cell.")
+    parser.add_argument("--version", action="version", version=f"softcell {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                parser_class=_Parser)
+    for name, (help_line, add) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_line, add_help=strict)
+        if command is None or command == name:
+            add(p, strict, specs)
     return parser
+
+
+def parse_arguments(argv: Sequence[str]) -> argparse.Namespace:
+    """Parse a command line. For ``params`` and ``simulate`` the component choice (flags and
+    the TOML file) is read first, and only the chosen components' parameters become flags:
+    one given for a component the run does not use is an error naming that component."""
+    command = next((a for a in argv if not a.startswith("-")), None)
+    if command not in WITH_COMPONENTS:
+        return build_parser(command if command in COMMANDS else "").parse_args(argv)
+    every = _component_specs(None)
+    first, unknown = build_parser(command, strict=False, specs=[s for s, _ in every.values()]
+                                  ).parse_known_args(argv)
+    if set(unknown) - {"-h", "--help"}:  # a mistyped flag: say so, with every flag known
+        build_parser(command, specs=[s for s, _ in every.values()]).parse_args(argv)
+    in_use = _chosen_components(first)
+    specs = _component_specs(in_use)
+    for name, (_, owner) in every.items():
+        if name not in specs and getattr(first, f"param_{name}", None) is not None:
+            raise SoftcellError(f"{_flag(name)} is a parameter of {owner}, which this run does "
+                                f"not use (components: {_shown_components(in_use)})")
+    return build_parser(command, specs=[s for s, _ in specs.values()]).parse_args(argv)
+
+
+def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
+    """The components a command line chooses: its TOML file's, then its flags'."""
+    base = load_config(args.config) if getattr(args, "config", None) else RunConfig()
+    return {**base.components, **_component_flags(args)}
+
+
+def _component_flags(args: argparse.Namespace) -> dict[str, Any]:
+    components: dict[str, Any] = {k: v for k, v in (
+        ("driving_protocol", getattr(args, "protocol", None)),
+        ("integrator", getattr(args, "integrator", None))) if v}
+    if getattr(args, "energy_terms", None):
+        components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]
+    return components
+
+
+def _shown_components(components: dict[str, Any]) -> str:
+    return "; ".join(f"{kind} {', '.join(v) if isinstance(v, list) else v}"
+                     for kind, v in components.items())
 
 
 def _note(line: str) -> None:
@@ -402,13 +509,11 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``softcell`` command; returns the exit status (2 for bad input, 130 when
     interrupted)."""
-    from softcell.core.plugin.registry import PluginWarning
-
     with warnings.catch_warnings():
         warnings.simplefilter("once", PluginWarning)
         original, warnings.showwarning = warnings.showwarning, _plugin_warning(_show_warning)
         try:
-            args = build_parser().parse_args(argv)  # builds the registry: plugins may warn
+            args = parse_arguments(sys.argv[1:] if argv is None else list(argv))
             return int(args.func(args))
         except SoftcellError as exc:
             print(f"softcell: error: {_one_line(exc)}", file=sys.stderr)
@@ -423,8 +528,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _plugin_warning(show):
     """Plugin warnings as one line each; other warnings as Python shows them."""
-    from softcell.core.plugin.registry import PluginWarning
-
     default = warnings.showwarning
 
     def dispatch(message, category, filename, lineno, file=None, line=None):

@@ -48,3 +48,7 @@ class RegistryError(SoftcellError):
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C during a run, once what was done is saved; the message says where the run
     stopped and how to resume it (CLI exit status 130, no traceback)."""
+
+
+class PluginWarning(UserWarning):
+    """A plugin was skipped because it failed to import or to register."""

@@ -4,6 +4,8 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
 import softcell
 from softcell.cli import main
 
@@ -69,3 +71,44 @@ def test_analyze_a_simulated_sweep(tmp_path, capsys):
     assert result.attrs["softcell_input_origin"] == "simulation"
     assert main(["analyze", str(run), "-o", str(out), "--discard", "-2"]) == 2
     assert "discard = -2.0 s is not allowed" in capsys.readouterr().err
+
+
+def test_version_and_help_import_no_numba_xarray_or_registry():
+    code = ("import sys\nfrom softcell.cli import main\n"
+            "for argv in (['--version'], ['--help']):\n"
+            "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
+            "heavy = [m for m in ('numba', 'xarray', 'softcell.core.plugin.registry', 'scipy')"
+            " if m in sys.modules]\nprint('HEAVY', heavy)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert f"softcell {softcell.__version__}" in run.stdout
+    assert "HEAVY []" in run.stdout, run.stdout
+
+
+def test_no_prefix_abbreviations(capsys):
+    with pytest.raises(SystemExit) as stop:  # argparse's own exit, status 2
+        main(["params", "--radiu", "4"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "unrecognized arguments: --radiu (did you mean '--radius'?)" in err
+
+
+def test_component_flags_only_for_the_components_in_use(tmp_path, capsys):
+    assert main(["params", "--atol", "1e-7"]) == 0  # rodas4, the default integrator
+    assert "1e-07" in capsys.readouterr().out
+    config = tmp_path / "explicit.toml"
+    config.write_text('[components]\nintegrator = "explicit_euler"\n')
+    assert main(["params", str(config), "--atol", "1e-7"]) == 2
+    assert capsys.readouterr().err.strip().startswith(
+        "softcell: error: --atol is a parameter of integrator 'rodas4', which this run does not "
+        "use (components:")
+    assert main(["simulate", "--integrator", "explicit_euler", "--atol", "1e-7",
+                 "-o", str(tmp_path / "out")]) == 2
+    assert "--atol is a parameter of integrator 'rodas4'" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    for argv, shown in ((["simulate", "--help"], True),
+                        (["simulate", "--integrator", "explicit_euler", "--help"], False)):
+        try:
+            main(argv)
+        except SystemExit as stop:
+            assert stop.code == 0
+        assert ("--atol" in capsys.readouterr().out) is shown

@@ -97,5 +97,5 @@ class Bending(EnergyTerm):
 
 
 @hookimpl
-def softcell_energy_terms() -> list[type]:
+def softcell_energy_terms() -> list[type[EnergyTerm]]:
     return [Bending]

@@ -135,5 +135,5 @@ class Contact(EnergyTerm):
 
 
 @hookimpl
-def softcell_energy_terms() -> list[type]:
+def softcell_energy_terms() -> list[type[EnergyTerm]]:
     return [Contact]

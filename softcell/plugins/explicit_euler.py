@@ -89,6 +89,13 @@ def _make_segment(partials, drive):
 
 
 class ExplicitEulerStepper(Stepper):
+    """The explicit scheme at a fixed step ``dt`` (s) for ``model``: a :class:`Stepper` whose
+    state counts whole steps, so sample times must be multiples of ``dt``.
+
+    An integrator that only chooses its step returns one from ``build(model)``; the bound
+    ``dt < 2 / explicit_decay_rate(model)`` keeps it stable.
+    """
+
     def __init__(self, model: Model, dt: float) -> None:
         key = (id(model.partials), id(model.drive))
         if key not in _STEPPERS:
@@ -145,5 +152,5 @@ class ExplicitEuler(Integrator):
 
 
 @hookimpl
-def softcell_integrators() -> list[type]:
+def softcell_integrators() -> list[type[Integrator]]:
     return [ExplicitEuler]

@@ -525,5 +525,5 @@ class Rodas4(Integrator):
 
 
 @hookimpl
-def softcell_integrators() -> list[type]:
+def softcell_integrators() -> list[type[Integrator]]:
     return [Rodas4]

@@ -37,6 +37,8 @@ def alternating_schedule(rng: np.random.Generator, duration: float, shortest: fl
 
 @njit(**JIT)
 def run_and_tumble_drive(phase, data, pose, context, coefficients, out):
+    """Run: force F0 = coefficients[0] (N) along the heading. Tumble: torque
+    data * T0 = coefficients[1] (N cm) about the center, data the turn sign."""
     if phase == RUN:
         out[0] = coefficients[0] * math.cos(pose[2])
         out[1] = coefficients[0] * math.sin(pose[2])
@@ -49,7 +51,9 @@ def run_and_tumble_drive(phase, data, pose, context, coefficients, out):
 
 @njit(**JIT)
 def pivot_drive(phase, data, pose, context, coefficients, out):
-    # coefficients: F0, T0, gamma_T, gamma_R, d, inner (1.0) or fixed (0.0) side
+    """As :func:`run_and_tumble_drive`, but a tumble turns the bot about a pivot offset d
+    along its minor axis (coefficients: F0 (N), T0 (N cm), gamma_T, gamma_R, d (cm), and
+    1.0 for the inner side of the turn or 0.0 for a fixed side)."""
     if phase == RUN:
         run_and_tumble_drive(phase, data, pose, context, coefficients, out)
         return
@@ -118,5 +122,5 @@ class ConstantPush(DrivingProtocol):
 
 
 @hookimpl
-def softcell_driving_protocols() -> list[type]:
+def softcell_driving_protocols() -> list[type[DrivingProtocol]]:
     return [RunAndTumble, PivotRunAndTumble, ConstantPush]

@@ -67,5 +67,5 @@ class Tension(EnergyTerm):
 
 
 @hookimpl
-def softcell_energy_terms() -> list[type]:
+def softcell_energy_terms() -> list[type[EnergyTerm]]:
     return [Tension]

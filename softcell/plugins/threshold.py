@@ -29,5 +29,5 @@ class Threshold(StopGoDetector):
 
 
 @hookimpl
-def softcell_stopgo_detectors() -> list[type]:
+def softcell_stopgo_detectors() -> list[type[StopGoDetector]]:
     return [Threshold]

@@ -1,7 +1,7 @@
 """Every extension point of softcell, in one module.
 
 A plugin is a module (or object) with functions named after these hooks and marked with
-:data:`softcell.hookimpl`. Each hook takes no arguments and returns a list of component
+:data:`softcell.plugin.hookimpl`. Each hook takes no arguments and returns a list of component
 *classes*; softcell instantiates them later with a validated :class:`~softcell.Parameters`.
 
 Hooks are called once, when the registry is built (the first time a component is looked up
@@ -12,7 +12,17 @@ same hooks as third-party ones (``softcell.plugins``).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import pluggy
+
+if TYPE_CHECKING:
+    from softcell.core.plugin.contracts import (
+        DrivingProtocol,
+        EnergyTerm,
+        Integrator,
+        StopGoDetector,
+    )
 
 hookspec = pluggy.HookspecMarker("softcell")
 hookimpl = pluggy.HookimplMarker("softcell")
@@ -23,13 +33,13 @@ hookimpl = pluggy.HookimplMarker("softcell")
 
 
 @hookspec
-def softcell_energy_terms() -> list[type]:
+def softcell_energy_terms() -> list[type[EnergyTerm]]:
     """Membrane energy terms this plugin provides.
 
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.plugin.contracts.EnergyTerm`. Each supplies an energy
+        Subclasses of :class:`softcell.plugin.EnergyTerm`. Each supplies an energy
         density per unit of the curve parameter xi (N cm, so that E = integral over xi in
         [0, 2 pi) is in N cm) and a compiled kernel for its pointwise partial derivatives
         P0 = de/dgamma (N), P1 = de/dgamma' (N), P2 = de/dgamma'' (N) at the collocation points,
@@ -40,13 +50,13 @@ def softcell_energy_terms() -> list[type]:
 
 
 @hookspec
-def softcell_driving_protocols() -> list[type]:
+def softcell_driving_protocols() -> list[type[DrivingProtocol]]:
     """Driving protocols (the bot's internal drive) this plugin provides.
 
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.plugin.contracts.DrivingProtocol`. Each draws its whole
+        Subclasses of :class:`softcell.plugin.DrivingProtocol`. Each draws its whole
         phase schedule (start times in s, phase codes, per-phase data) from a
         :class:`numpy.random.Generator`, and supplies a compiled kernel that maps the phase and
         the bot's state (x, y in cm, heading in rad) to a drive force (N) and torque (N cm).
@@ -56,13 +66,13 @@ def softcell_driving_protocols() -> list[type]:
 
 
 @hookspec
-def softcell_integrators() -> list[type]:
+def softcell_integrators() -> list[type[Integrator]]:
     """Time integrators this plugin provides.
 
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.plugin.contracts.Integrator`. Each advances the coupled
+        Subclasses of :class:`softcell.plugin.Integrator`. Each advances the coupled
         bot-membrane state (membrane Fourier modes in cm, bot position in cm, heading in rad)
         from one sample time (s) to the next.
 
@@ -76,13 +86,13 @@ def softcell_integrators() -> list[type]:
 
 
 @hookspec
-def softcell_stopgo_detectors() -> list[type]:
+def softcell_stopgo_detectors() -> list[type[StopGoDetector]]:
     """Stop/go detectors this plugin provides.
 
     Returns
     -------
     list of type
-        Subclasses of :class:`softcell.core.plugin.contracts.StopGoDetector`. Each labels every
+        Subclasses of :class:`softcell.plugin.StopGoDetector`. Each labels every
         sample of a speed series (cm/s) as stop (0), go (1) or unknown (-1, where the speed
         is NaN).
 

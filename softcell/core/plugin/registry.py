@@ -26,7 +26,7 @@ import pluggy
 from softcell.core.params import ParameterSpec, merge_specs, suggest
 from softcell.core.plugin import hookspecs
 from softcell.core.plugin.contracts import CONTRACTS, Component
-from softcell.errors import ConfigError, RegistryError
+from softcell.errors import ConfigError, PluginWarning, RegistryError
 
 ENTRY_POINT_GROUP = "softcell"
 DISABLE_ENV = "SOFTCELL_DISABLE_PLUGINS"
@@ -36,11 +36,9 @@ BUILTIN_PLUGINS: tuple[str, ...] = tuple(f"softcell.plugins.{name}" for name in 
     "bending", "tension", "contact", "run_and_tumble", "explicit_euler", "rodas4", "threshold"))
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
+__all__ = ["KINDS", "PluginWarning", "Registered", "Registry", "get_registry", "registered"]
+
 KINDS: dict[str, str] = {hook: contract.kind for hook, contract in CONTRACTS.items()}
-
-
-class PluginWarning(UserWarning):
-    """A plugin was skipped because it failed to import or to register."""
 
 
 @dataclass(frozen=True)

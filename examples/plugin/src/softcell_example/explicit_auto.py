@@ -6,11 +6,13 @@ to return a ``Stepper`` from ``build(model)``.
 
 import math
 
-from softcell.core.engine import explicit_decay_rate
-from softcell.core.params import ParameterSpec
-from softcell.core.plugin.contracts import Integrator
-from softcell.errors import ParameterError
-from softcell.plugins.explicit_euler import ExplicitEulerStepper
+from softcell.plugin import (
+    ExplicitEulerStepper,
+    Integrator,
+    ParameterError,
+    ParameterSpec,
+    explicit_decay_rate,
+)
 
 SAFETY = ParameterSpec("stability_fraction", 0.5, "1",
                        "step as a fraction of the explicit stability limit 2 / lambda_max",

@@ -5,9 +5,7 @@ A noisy speed near one threshold then no longer flickers between stop and go.
 
 import numpy as np
 
-from softcell.core.params import ParameterSpec
-from softcell.core.plugin.contracts import StopGoDetector
-from softcell.errors import ParameterError
+from softcell.plugin import ParameterError, ParameterSpec, StopGoDetector
 
 
 class Hysteresis(StopGoDetector):

@@ -4,7 +4,7 @@ softcell imports this module when it builds its registry and calls each hook onc
 hooks return component classes, never instances.
 """
 
-from softcell import hookimpl
+from softcell.plugin import hookimpl
 from softcell_example.explicit_auto import ExplicitAuto
 from softcell_example.hysteresis import Hysteresis
 from softcell_example.pressure import Pressure

@@ -9,8 +9,7 @@ force density f = -P0 + D(P1) = P (y', -x'): P |gamma'| along the outward normal
 import numpy as np
 from numba import njit
 
-from softcell.core.params import ParameterSpec
-from softcell.core.plugin.contracts import EnergyTerm
+from softcell.plugin import EnergyTerm, ParameterSpec
 
 PRESSURE = ParameterSpec("pressure", 1e-4, "N cm-1", "2D pressure inside the membrane",
                          minimum=0.0, minimum_inclusive=True)

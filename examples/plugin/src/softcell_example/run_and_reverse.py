@@ -7,10 +7,9 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.core.params import MODEL_PARAMETERS
-from softcell.core.plugin.contracts import DrivingProtocol, Schedule
+from softcell.plugin import MODEL_PARAMETERS, PHASE_RUN, PHASE_TUMBLE, DrivingProtocol, Schedule
 
-RUN, TUMBLE = 1, 0  # the bot_phase flag values
+RUN, TUMBLE = PHASE_RUN, PHASE_TUMBLE  # the bot_phase flag values (numba reads globals)
 
 
 @njit(nogil=True)

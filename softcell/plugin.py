@@ -1,0 +1,86 @@
+"""Everything a plugin author imports, from one module.
+
+A plugin is a module with functions named after the hooks (``softcell_energy_terms``,
+``softcell_driving_protocols``, ``softcell_integrators``, ``softcell_stopgo_detectors``),
+each marked with :data:`hookimpl` and returning a list of component classes, registered under
+the entry-point group ``softcell``. ``docs/plugins.md`` is the tutorial; the names below are
+the public interface, and everything else in softcell is private and may move.
+
+Contracts (subclass one per component)
+    :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`Integrator`,
+    :class:`StopGoDetector`; what an integrator returns: :class:`Stepper`; what a protocol
+    draws: :class:`Schedule`; what an integrator composes: :class:`Model`.
+Parameters
+    :class:`ParameterSpec` declares one (default, unit, range); :data:`MODEL_PARAMETERS`
+    holds the model's own, to reuse by listing them; :class:`Parameters` is what a component
+    receives as ``self.params``; :class:`ParameterError` is the error for a bad value.
+Codes
+    :data:`PHASE_RUN`, :data:`PHASE_TUMBLE`, :data:`PHASE_UNKNOWN` (``bot_phase``);
+    :data:`GO`, :data:`STOP`, :data:`STOPGO_UNKNOWN` (stop/go labels).
+Building blocks
+    :class:`RunAndTumble` and :class:`PivotRunAndTumble` (subclass to change only the
+    schedule), their drive kernels :func:`run_and_tumble_drive` and :func:`pivot_drive`,
+    :func:`alternating_schedule`; :class:`ExplicitEulerStepper` (the explicit scheme, for an
+    integrator that only chooses its step) and :func:`explicit_decay_rate` (its stability
+    bound).
+Testing
+    :func:`registered` registers plugin modules for the duration of a ``with`` block.
+"""
+
+from __future__ import annotations
+
+from softcell.core.engine.model import Model
+from softcell.core.engine.reference import explicit_decay_rate
+from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
+from softcell.core.plugin.contracts import (
+    Component,
+    DrivingProtocol,
+    EnergyTerm,
+    Integrator,
+    Schedule,
+    Stepper,
+    StopGoDetector,
+)
+from softcell.core.plugin.hookspecs import hookimpl
+from softcell.core.plugin.registry import registered
+from softcell.core.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
+from softcell.errors import ContractError, ParameterError
+from softcell.plugins.explicit_euler import ExplicitEulerStepper
+from softcell.plugins.run_and_tumble import (
+    PivotRunAndTumble,
+    RunAndTumble,
+    alternating_schedule,
+    pivot_drive,
+    run_and_tumble_drive,
+)
+
+__all__ = [
+    "GO",
+    "MODEL_PARAMETERS",
+    "PHASE_RUN",
+    "PHASE_TUMBLE",
+    "PHASE_UNKNOWN",
+    "STOP",
+    "STOPGO_UNKNOWN",
+    "Component",
+    "ContractError",
+    "DrivingProtocol",
+    "EnergyTerm",
+    "ExplicitEulerStepper",
+    "Integrator",
+    "Model",
+    "ParameterError",
+    "ParameterSpec",
+    "Parameters",
+    "PivotRunAndTumble",
+    "RunAndTumble",
+    "Schedule",
+    "Stepper",
+    "StopGoDetector",
+    "alternating_schedule",
+    "explicit_decay_rate",
+    "hookimpl",
+    "pivot_drive",
+    "registered",
+    "run_and_tumble_drive",
+]
