@@ -36,3 +36,26 @@ def test_python_examples_in_the_docs_run(tmp_path, monkeypatch):
         assert blocks, f"docs/{name} has no python example"
         for block in blocks:
             exec(compile(block, f"docs/{name}", "exec"), {})
+
+
+def test_the_model_page_lists_every_model_parameter():
+    from softcell.core.params import MODEL_PARAMETERS
+
+    text = (Path(__file__).parents[1] / "docs" / "model.md").read_text()
+    table = text.split("## 2. Parameters")[1].split("## 3.")[0]
+    missing = [name for name in MODEL_PARAMETERS if f"`{name}`" not in table]
+    assert not missing, f"docs/model.md section 2 lacks {missing}"
+
+
+def test_docstrings_cite_sections_that_exist():
+    import re
+
+    root = Path(__file__).parents[1]
+    text = (root / "docs" / "model.md").read_text()
+    sections = set(re.findall(r"^## (\d+)\. ", text, flags=re.M))
+    cited = set()
+    for path in [*(root / "softcell").rglob("*.py"), *(root / "docs").glob("*.md"),
+                 root / "README.md"]:
+        for first, last in re.findall(r"model\.md §(\d+)(?:-(\d+))?", path.read_text()):
+            cited |= {str(n) for n in range(int(first), int(last or first) + 1)}
+    assert cited and cited <= sections, cited - sections

@@ -2,8 +2,8 @@
 
 Without a membrane the bot's motion within a phase is known in closed form: a run is a
 straight line at v = F0 / gamma_T; a tumble is a rotation at omega = T0 / gamma_R about the
-bot's center or about a pivot offset d along the minor axis. Long free-bot statistics (SPEC
-section 5) therefore cost nothing.
+bot's center or about a pivot offset d along the minor axis. Long free-bot statistics
+(docs/model.md §5) therefore cost nothing.
 
 Renewal formula. Take a cycle = one run then one tumble. In the frame of the heading at the
 cycle start, the cycle displaces the bot by b = v tau_r + s_p d (i - i e^{i phi}) (complex
@@ -68,7 +68,8 @@ def diffusion_from_cycles(displacement: np.ndarray, duration: np.ndarray, lags: 
 
 
 def turn_correlation(params: Parameters) -> float:
-    """<cos(omega tau)> over a tumble, tau ~ U[phase_min, phase_max] (SPEC: -0.1824)."""
+    """<cos(omega tau)> over a tumble, tau ~ U[phase_min, phase_max] (-0.1824 with the
+    defaults, docs/model.md §5)."""
     _, omega, _ = _kinematics(params)
     lo, hi = float(params.phase_min), float(params.phase_max)
     return float(_uniform_exp(1j * omega, lo, hi).real)

@@ -1,13 +1,13 @@
 """The parameter model: every model constant with its default, unit and allowed range.
 
-The catalogue :data:`MODEL_PARAMETERS` is ../shared/SPEC.md section 2 as code. A
+The catalogue :data:`MODEL_PARAMETERS` is the table of docs/model.md §2 as code. A
 :class:`Parameters` object is one validated point in that space: built from defaults,
-a TOML file and command-line flags, checked by the rules of SPEC section 2, and stored in
+a TOML file and command-line flags, checked by the rules of docs/model.md §2, and stored in
 every output file's attributes (:meth:`Parameters.to_attrs`) so that any run can be redone.
 Components may declare further parameters (a third-party energy term with its own
 coefficient); they are validated and stored the same way.
 
-Units follow SPEC section 1: cm, s, rad, N. Unit strings are UDUNITS-2 syntax, as CF asks.
+Units follow docs/model.md §1: cm, s, rad, N. Unit strings are UDUNITS-2 syntax, as CF asks.
 """
 
 from __future__ import annotations
@@ -128,7 +128,7 @@ def _positive(name: str, default: float, unit: str, long_name: str) -> Parameter
     return ParameterSpec(name, default, unit, long_name, minimum=0.0)
 
 
-#: SPEC.md section 2, in the order of its table.
+#: docs/model.md §2, in the order of its table.
 MODEL_PARAMETERS: dict[str, ParameterSpec] = {
     spec.name: spec
     for spec in (
@@ -174,13 +174,13 @@ MODEL_PARAMETERS: dict[str, ParameterSpec] = {
 
 def _derived_default(name: str, values: Mapping[str, Value]) -> Value:
     if name == "duration":
-        # SPEC section 2 (an assumption): the paper's experiment durations.
+        # docs/model.md §2 (an assumption): the paper's experiment durations.
         return 900.0 if float(values["radius"]) < 10.0 else 1800.0
     raise AssertionError(f"no derived default for {name}")  # pragma: no cover
 
 
 def _cross_check(v: Mapping[str, Value]) -> None:
-    """The rules of SPEC section 2 that involve more than one parameter."""
+    """The rules of docs/model.md §2 that involve more than one parameter."""
     if v["radius"] <= v["bot_semi_major"]:
         raise ParameterError("radius", v["radius"],
                              f"must be > bot_semi_major = {v['bot_semi_major']:g} cm", "cm")

@@ -1,4 +1,4 @@
-"""Signed distance from a point to an ellipse, with its gradient (SPEC section 4).
+"""Signed distance from a point to an ellipse, with its gradient (docs/model.md §4).
 
 In the ellipse's own frame (semi-axes a >= b along x and y), the closest point of the ellipse
 to (u, v), u, v >= 0, is q = (a^2 u / (t + a^2), b^2 v / (t + b^2)) where t is the root in

@@ -1,5 +1,5 @@
 """The Jacobian of the coupled membrane-bot right-hand side, from the energy terms' pointwise
-second derivatives (SPEC section 3; docs/plugins.md, "Jacobians").
+second derivatives (docs/model.md §3; docs/plugins.md, "Jacobians").
 
 Unknowns, in order: Re g_k and Im g_k for k = -Lc..Lc (cm), then the bot's x, y (cm) and
 heading (rad); ``n_u = 2 (2 Lc + 1) + 3``. The right-hand side is

@@ -1,4 +1,4 @@
-"""Run-length encoding of stop/go labels into uncensored phases (SPEC section 6)."""
+"""Run-length encoding of stop/go labels into uncensored phases (docs/model.md §6)."""
 
 from __future__ import annotations
 

@@ -55,7 +55,7 @@ def evaluate(modes, spec, z, zp, zpp):
 
 @njit(**JIT)
 def assemble(q0, q1, q2, has_q0, spec, fhat):
-    """Force modes f_hat_k = -Q0_hat + i k Q1_hat + k^2 Q2_hat for |k| <= Lc (SPEC section 3).
+    """Force modes f_hat_k = -Q0_hat + i k Q1_hat + k^2 Q2_hat for |k| <= Lc (docs/model.md §3).
 
     ``q0, q1, q2``: complex128[N], the summed partials P0, P1, P2 as x + i y (N).
     ``has_q0``: False skips the Q0 transform (no bot contact: Q0 is zero).

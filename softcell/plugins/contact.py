@@ -4,7 +4,7 @@ signed distance from the membrane point to the bot's ellipse (negative inside).
 de/dgamma = -(l0 / 2 pi)(A / lambda) exp(-rho / lambda) grad rho; with d = gamma - r_bot,
 de/dr_bot = -de/dgamma and
 de/dtheta_bot = (l0 / 2 pi)(A / lambda) exp(-rho / lambda) (d x grad rho),
-so the reaction torque is taken about the bot's center (SPEC section 4; the paper's
+so the reaction torque is taken about the bot's center (docs/model.md §4; the paper's
 gamma x f_int about the origin is a typo). Points farther than CONTACT_CUTOFF_LENGTHS lambda
 from the ellipse feel nothing; two cheap tests skip them before any distance is computed.
 """

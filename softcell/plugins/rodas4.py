@@ -32,7 +32,14 @@ from softcell.kernels.jacobian import (
     compose_hessians,
     make_fd_drive_jacobian,
 )
-from softcell.kernels.linalg import lu_factor, lu_solve
+from softcell.kernels.rosenbrock import (
+    Tableau,
+    dense_output,
+    dense_value,
+    error_norm,
+    factor_iteration_matrix,
+    stages,
+)
 from softcell.kernels.spectral import AXES, assemble, derivative_spectrum
 
 # RODAS4 in Hairer & Wanner's transformed variables: gamma, a_ij, c_ij, dense output h_ij.
@@ -59,6 +66,9 @@ DENSE = np.array([
     [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
      -6.594389125716872],
 ])
+
+#: The method as data, for the generic step of :mod:`softcell.kernels.rosenbrock`.
+RODAS4 = Tableau(GAMMA, A, C, DENSE)
 
 # Step-size control (Hairer & Wanner's RODAS defaults).
 SAFETY, SHRINK_LIMIT, GROW_LIMIT = 0.9, 0.2, 6.0
@@ -258,10 +268,17 @@ def _make_loop(smooth_group, fine_group, drive):
                 ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
 
     @njit(**JIT_COMPOSED)
+    def stage_rhs(y, out, args):
+        """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
+        phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, \
+            membrane, ws = args
+        rhs(y, phase, datum, out, coefficients, context, drive_coefficients, mobility,
+            bot_mobility, membrane, ws)
+
+    @njit(**JIT_COMPOSED)
     def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, phases, data,
                    coefficients, context, drive_coefficients, mobility, bot_mobility,
                    membrane, atol, rtol, max_step, a, cc, hd, ws):
-        nu = u.size
         t = clock[T]
         p = phase_index[0]
         k = ws.k
@@ -287,42 +304,13 @@ def _make_loop(smooth_group, fine_group, drive):
                     land = True
                 if h <= 1e-14 * (1.0 + abs(t)):
                     return STEP_UNDERFLOW
-                fac = 1.0 / (h * GAMMA)
-                for i in range(nu):
-                    for j in range(nu):
-                        mat[i, j] = -ws.jac[i, j]
-                    mat[i, i] += fac
-                if not lu_factor(mat, ws.pivots):
+                if not factor_iteration_matrix(ws.jac, h, GAMMA, mat, ws.pivots):
                     return SINGULAR
-                for s in range(6):
-                    if s == 0:
-                        force[:] = ws.f0
-                    else:
-                        if s < 5:
-                            for i in range(nu):
-                                acc = u[i]
-                                for j in range(s):
-                                    acc += a[s, j] * k[j, i]
-                                y[i] = acc
-                        else:
-                            for i in range(nu):
-                                y[i] += k[4, i]
-                        rhs(y, phase, datum, force, coefficients, context,
-                            drive_coefficients, mobility, bot_mobility, membrane, ws)
-                        counters[RHS_CALLS] += 1
-                        for i in range(nu):
-                            acc = 0.0
-                            for j in range(s):
-                                acc += cc[s, j] * k[j, i]
-                            force[i] += acc / h
-                    lu_solve(mat, ws.pivots, force)
-                    k[s, :] = force
-                err = 0.0
-                for i in range(nu):
-                    ynew[i] = y[i] + k[5, i]
-                    scale = atol + rtol * max(abs(u[i]), abs(ynew[i]))
-                    err += (k[5, i] / scale) ** 2
-                err = math.sqrt(err / nu)
+                stages(stage_rhs, (phase, datum, coefficients, context, drive_coefficients,
+                                   mobility, bot_mobility, membrane, ws),
+                       u, ws.f0, h, a, cc, mat, ws.pivots, k, y, force)
+                counters[RHS_CALLS] += cc.shape[0] - 1
+                err = error_norm(u, y, k, atol, rtol, ynew)
                 if not math.isfinite(err):
                     err = 1e10
                 fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err ** 0.25 / SAFETY))
@@ -337,17 +325,8 @@ def _make_loop(smooth_group, fine_group, drive):
                     clock[H_ACCEPTED] = h
                     clock[ERR_ACCEPTED] = max(1e-2, err)
                     clock[REJECTED_LAST] = 0.0
-                    for i in range(nu):
-                        d1 = 0.0
-                        d2 = 0.0
-                        for j in range(5):
-                            d1 += hd[0, j] * k[j, i]
-                            d2 += hd[1, j] * k[j, i]
-                        dense[0, i] = u[i]
-                        dense[1, i] = ynew[i]
-                        dense[2, i] = d1
-                        dense[3, i] = d2
-                        u[i] = ynew[i]
+                    dense_output(u, ynew, k, hd, dense)
+                    u[:] = ynew
                     clock[T_LAST] = t
                     clock[H_LAST] = h
                     if land:
@@ -366,10 +345,7 @@ def _make_loop(smooth_group, fine_group, drive):
         if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
             sample[:] = u
         else:
-            theta = (t_end - clock[T_LAST]) / clock[H_LAST]
-            for i in range(nu):
-                sample[i] = ((1.0 - theta) * dense[0, i] + theta * (
-                    dense[1, i] + (1.0 - theta) * (dense[2, i] + theta * dense[3, i])))
+            dense_value(dense, (t_end - clock[T_LAST]) / clock[H_LAST], sample)
         return OK
 
     @njit(**JIT_COMPOSED)
@@ -472,7 +448,7 @@ class Rodas4Stepper(Stepper):
             state["dense"], times, samples, schedule.start, schedule.phase,
             schedule.data, self.coefficients, m.context, m.drive_coefficients,
             m.membrane_mobility, m.bot_mobility, m.has_membrane, self.atol, self.rtol,
-            self.max_step, A, C, DENSE, self.ws)
+            self.max_step, RODAS4.a, RODAS4.c, RODAS4.dense, self.ws)
         if status != OK:
             t = state["clock"][T]
             reason = "the step size underflowed" if status == STEP_UNDERFLOW else \

@@ -1,4 +1,4 @@
-"""Driving protocols of SPEC section 5: run_and_tumble, pivot_run_and_tumble, constant_push.
+"""Driving protocols of docs/model.md §5: run_and_tumble, pivot_run_and_tumble, constant_push.
 
 Runs and tumbles alternate, starting with a run; each lasts an independent U[phase_min,
 phase_max] draw; a tumble turns counterclockwise or clockwise with probability 1/2. The bot

@@ -1,4 +1,5 @@
-"""The paper's stop/go detector: a sample is *go* when its speed reaches a threshold (SPEC 6).
+"""The paper's stop/go detector: a sample is *go* when its speed reaches a threshold
+(docs/model.md §6).
 
 The paper uses 0.3 cm/s for the experiments and 0.03 cm/s for the simulations; the default is
 the simulations' value.

@@ -32,7 +32,7 @@ PROTOCOL = "run_and_tumble"
 #: fraction of the drive force F0.
 CONTACT_FRACTION_OF_F0 = 0.01
 
-#: Go threshold of the coarse statistics: the simulations' 0.03 cm/s (SPEC section 6).
+#: Go threshold of the coarse statistics: the simulations' 0.03 cm/s (docs/model.md §6).
 GO_THRESHOLD = 0.03
 
 

@@ -20,7 +20,7 @@ _finite = {"allow_nan": False, "allow_infinity": False}
 
 @st.composite
 def valid_parameter_values(draw: st.DrawFn) -> dict[str, Any]:
-    """Parameter overrides that satisfy every rule of SPEC section 2."""
+    """Parameter overrides that satisfy every rule of docs/model.md §2."""
     semi_major = draw(st.floats(0.5, 5.0, **_finite))
     nodes = draw(st.sampled_from([64, 128, 256, 512, 1024, 2048]))
     cutoff = draw(st.integers(2, nodes // 2 - 1))

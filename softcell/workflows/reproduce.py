@@ -45,7 +45,7 @@ RADII = tuple(float(r) for r in range(4, 14))
 class Design:
     """What :func:`reproduce` runs.
 
-    ``duration`` None means the paper's design (SPEC section 2: 900 s for R <= 9 cm, 1800 s
+    ``duration`` None means the paper's design (docs/model.md §2: 900 s for R <= 9 cm, 1800 s
     above). ``discard`` (s) is left out of every statistic.
     """
 
@@ -57,7 +57,7 @@ class Design:
     free_bot_realizations: int = 25
     video: VideoDesign = field(default_factory=VideoDesign)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
-    parameters: dict[str, Any] = field(default_factory=dict)  # beyond SPEC's defaults
+    parameters: dict[str, Any] = field(default_factory=dict)  # beyond the defaults
     caveat: str = ""  # what the design gives up against the paper's, for the report
 
     def describe(self) -> str:

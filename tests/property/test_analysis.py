@@ -1,4 +1,4 @@
-"""Analysis (SPEC section 6): MSD, stop/go, fits, theory, shape index, collapse."""
+"""Analysis (docs/model.md §6): MSD, stop/go, fits, theory, shape index, collapse."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,5 @@
-"""The bot: signed distance to the ellipse, free-bot kinematics and diffusion (SPEC 4-5)."""
+"""The bot: signed distance to the ellipse, free-bot kinematics and diffusion
+(docs/model.md §4-5)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,5 @@
-"""Long explicit-Euler runs (minutes each): the pushed cell and the two regimes (SPEC 3, 6)."""
+"""Long explicit-Euler runs (minutes each): the pushed cell and the two regimes
+(docs/model.md §3, §6)."""
 
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ def test_decoupled_speed_at_12(regimes):
 def test_length_within_a_tenth_of_a_percent(regimes):
     ds = regimes[0]
     # Length from the stored nodes' Fourier series (64 nodes > 2 cutoff: exact), evaluated on
-    # 1024 points; within 0.1 % of its initial value (SPEC section 3).
+    # 1024 points; within 0.1 % of its initial value (docs/model.md §3).
     z = (ds["membrane_x"] + 1j * ds["membrane_y"]).values
     nodes = z.shape[-1]
     k = np.fft.fftfreq(nodes, 1 / nodes)

@@ -1,4 +1,5 @@
-"""The membrane model against SPEC section 3: analytic forces, energies, gradients, time scales."""
+"""The membrane model against docs/model.md §3: analytic forces, energies, gradients and
+time scales."""
 
 import math
 

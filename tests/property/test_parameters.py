@@ -1,4 +1,4 @@
-"""Parameter validation: the rules of SPEC section 2 on generated parameter sets."""
+"""Parameter validation: the rules of docs/model.md §2 on generated parameter sets."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""Analysis of simulated and tracked Datasets (SPEC section 6): MSD, fits, stop/go, theory,
+"""Analysis of simulated and tracked Datasets (docs/model.md §6): MSD, fits, stop/go, theory,
 shape index, regimes and scaling collapse. Entry point: :func:`analyze`; in an xarray
 session, the ``ds.softcell`` accessor.
 

@@ -1,4 +1,4 @@
-"""Fits of an MSD curve and the run-and-tumble theory (SPEC section 6; SI Sec. S3, S4).
+"""Fits of an MSD curve and the run-and-tumble theory (docs/model.md §6; SI Sec. S3, S4).
 
 Two conventions for diffusion, never mixed up:
 

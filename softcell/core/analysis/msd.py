@@ -1,4 +1,4 @@
-"""Mean-squared displacement by the FFT algorithm, with missing samples (SPEC section 6).
+"""Mean-squared displacement by the FFT algorithm, with missing samples (docs/model.md §6).
 
 For positions r_i (NaN where unknown) with validity w_i in {0, 1}, the sum over pairs
 S(m) = sum_i w_i w_(i+m) |r_(i+m) - r_i|^2 and the pair count C(m) = sum_i w_i w_(i+m) are

@@ -1,4 +1,4 @@
-"""Dataset in, Dataset out: everything the paper computes from trajectories (SPEC section 6).
+"""Dataset in, Dataset out: everything the paper computes from trajectories (docs/model.md §6).
 
 :func:`analyze` takes a simulation or tracked Dataset (dims ``[sweep dims...,] realization,
 time[, node]``) and returns the analysis Dataset: for each body (``cell``, ``bot``) and each
@@ -35,7 +35,7 @@ from softcell.errors import SoftcellError
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
 #: Regime flags of the ``regime`` variable.
-#: Scaling-collapse variants (SPEC section 6): MSD * R^a against lag * R^b.
+#: Scaling-collapse variants (docs/model.md §6): MSD * R^a against lag * R^b.
 COLLAPSE_VARIANTS = ((1 / 3, 1.0), (1 / 3, -1.0), (-1 / 3, 1.0), (-1 / 3, -1.0))
 COLLAPSE_GRID = 50
 
@@ -79,7 +79,7 @@ def _detector(name: str, threshold: float | None):
 
 class LagPlan:
     """Which samples give which lags: short lags (< short_lag_max) from the finest segment,
-    longer lags from the whole record decimated to the coarsest interval (SPEC section 6)."""
+    longer lags from the whole record decimated to the coarsest interval (docs/model.md §6)."""
 
     def __init__(self, time: np.ndarray, options: Mapping[str, Any]) -> None:
         segs = segments(time)
@@ -165,7 +165,7 @@ def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndar
 
 def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
             progress: bool = False) -> xr.Dataset:
-    """Analyse a simulation or tracked Dataset (SPEC section 6).
+    """Analyse a simulation or tracked Dataset (docs/model.md §6).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Stop and go phases of a speed series (SPEC section 6).
+"""Stop and go phases of a speed series (docs/model.md §6).
 
 A detector (a plugin, default ``threshold``) labels each sample go (1), stop (0) or unknown
 (-1), separately on each sampling segment. A phase of n consecutive equal labels lasts

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 def equilibrium_radius(params: Parameters) -> float:
     """Radius (cm) of the force-free circle: the root near l0 / 2 pi of
-    4 pi alpha l0 R^3 - 2 alpha l0^2 R^2 - k = 0 (SPEC section 3; the paper's cubic has a typo).
+    4 pi alpha l0 R^3 - 2 alpha l0^2 R^2 - k = 0 (docs/model.md §3; the paper's cubic has a typo).
     """
     l0, alpha, k = params.membrane_length, float(params.tension), float(params.bending_stiffness)
     roots = np.roots([4 * math.pi * alpha * l0, -2 * alpha * l0**2, 0.0, -k])
@@ -113,7 +113,7 @@ def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
 def initial_state(model: Model, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray,
                                                                      Schedule]:
     """Draw the heading and the schedule (in that order) and set up the membrane at rest:
-    the equilibrium circle centred on the bot (SPEC section 5)."""
+    the equilibrium circle centred on the bot (docs/model.md §5)."""
     heading = model.protocol.initial_heading(rng)
     schedule = model.protocol.schedule(rng, float(model.params.duration))
     radius = equilibrium_radius(model.params) if model.has_membrane else 0.0

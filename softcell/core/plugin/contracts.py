@@ -95,7 +95,7 @@ class EnergyTerm(Component):
     The energy is E = integral_0^{2 pi} e(gamma, gamma', gamma''; bot pose) d xi (N cm),
     evaluated as E = (2 pi / N) sum_n e_n at the collocation points xi_n = 2 pi n / N.
     The engine sums the partial derivatives of all terms and assembles the force density
-    f = -P0 + D(P1) - D^2(P2) spectrally (SPEC section 3).
+    f = -P0 + D(P1) - D^2(P2) spectrally (docs/model.md §3).
     """
 
     kind = "energy_term"
@@ -194,7 +194,8 @@ class Schedule:
 
 
 class DrivingProtocol(Component):
-    """The bot's internal drive: a phase schedule and a force and torque in each phase (SPEC 5)."""
+    """The bot's internal drive: a phase schedule and a force and torque in each phase
+    (docs/model.md §5)."""
 
     kind = "driving_protocol"
     kernels = {"drive_kernel": f"void(int8, float64, {', '.join([VECTOR] * 4)})"}
@@ -273,7 +274,7 @@ class Stepper(ABC):
 
 
 class StopGoDetector(Component):
-    """Labels each sample of a speed series as stop or go (SPEC section 6)."""
+    """Labels each sample of a speed series as stop or go (docs/model.md §6)."""
 
     kind = "stopgo_detector"
 
