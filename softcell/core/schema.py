@@ -81,6 +81,90 @@ VARIABLES: dict[str, VariableSpec] = {
     )
 }
 
+#: Stands for the sweep dims (one per swept parameter, maybe none) in an analysis variable's
+#: dims.
+SWEEP = "..."
+
+#: The analysis Dataset's variables, in the order they are written (:func:`analyze` fills
+#: them; ``flag_values`` of the two coded variables are the codes above). Over a radius sweep
+#: it also holds the scaling-collapse variables along ``collapse_variant``.
+ANALYSIS_VARIABLES: dict[str, VariableSpec] = {v.name: v for v in (
+    VariableSpec("msd", (SWEEP, "body", "lag"), "f", "cm2",
+                 "mean-squared displacement, pooled over realizations"),
+    VariableSpec("msd_sem", (SWEEP, "body", "lag"), "f", "cm2",
+                 "standard error of the MSD across realizations"),
+    VariableSpec("msd_pairs", (SWEEP, "body", "lag"), "f", "1", "number of displacement pairs"),
+    VariableSpec("msd_realization", (SWEEP, "body", "realization", "lag"), "f", "cm2",
+                 "mean-squared displacement of each realization"),
+    VariableSpec("msd_theory", (SWEEP, "body", "lag"), "f", "cm2",
+                 "run-and-tumble theory 2 v0_hat^2 (tau <tau_g> - <tau_g>^2 (1 - "
+                 "exp(-tau/<tau_g>)))"),
+    VariableSpec("speed", (SWEEP, "body", "realization", "time"), "f", "cm s-1",
+                 "speed, forward difference within a sampling segment"),
+    VariableSpec("stopgo_label", (SWEEP, "body", "realization", "time"), "i", "1",
+                 "stop/go label",
+                 {"flag_values": STOPGO_FLAGS, "flag_meanings": STOPGO_MEANINGS}),
+    VariableSpec("go_duration", (SWEEP, "body", "event"), "f", "s",
+                 "duration of a complete go phase, (n - 1) dt"),
+    VariableSpec("stop_duration", (SWEEP, "body", "event"), "f", "s",
+                 "duration of a complete stop phase, (n - 1) dt"),
+    VariableSpec("go_pdf", (SWEEP, "body", "scaled_duration"), "f", "1",
+                 "probability density of go durations over their mean"),
+    VariableSpec("stop_pdf", (SWEEP, "body", "scaled_duration"), "f", "1",
+                 "probability density of stop durations over their mean"),
+    VariableSpec("mean_go_duration_shifted", (SWEEP, "body", "threshold_shift"), "f", "s",
+                 "mean go duration with the threshold shifted"),
+    VariableSpec("mean_stop_duration_shifted", (SWEEP, "body", "threshold_shift"), "f", "s",
+                 "mean stop duration with the threshold shifted"),
+    VariableSpec("mean_speed", (SWEEP, "body"), "f", "cm s-1",
+                 "mean speed (finest sampling segment)"),
+    VariableSpec("v0_hat", (SWEEP, "body"), "f", "cm s-1",
+                 "root mean square speed sqrt(mean^2 + variance), stops included (theory's "
+                 "v0 hat)"),
+    VariableSpec("mean_go_duration", (SWEEP, "body"), "f", "s", "mean go duration <tau_g>"),
+    VariableSpec("mean_stop_duration", (SWEEP, "body"), "f", "s", "mean stop duration <tau_s>"),
+    VariableSpec("go_fraction", (SWEEP, "body"), "f", "1",
+                 "fraction of labelled samples that are go"),
+    VariableSpec("go_ks_statistic", (SWEEP, "body"), "f", "1",
+                 "Kolmogorov-Smirnov distance of t/<t> (go) to exp(-t')"),
+    VariableSpec("go_ks_pvalue", (SWEEP, "body"), "f", "1",
+                 "p-value of go_ks_statistic (fully specified law)"),
+    VariableSpec("stop_ks_statistic", (SWEEP, "body"), "f", "1",
+                 "Kolmogorov-Smirnov distance of t/<t> (stop) to exp(-t')"),
+    VariableSpec("stop_ks_pvalue", (SWEEP, "body"), "f", "1",
+                 "p-value of stop_ks_statistic (fully specified law)"),
+    VariableSpec("ballistic_velocity", (SWEEP, "body"), "f", "cm s-1",
+                 "v of the fit MSD = v^2 tau^2 at short lags"),
+    VariableSpec("ballistic_velocity_error", (SWEEP, "body"), "f", "cm s-1",
+                 "standard error of ballistic_velocity"),
+    VariableSpec("msd_slope", (SWEEP, "body"), "f", "cm2 s-1",
+                 "D hat of the fit MSD = D hat tau at long lags (the paper's D hat)"),
+    VariableSpec("msd_slope_error", (SWEEP, "body"), "f", "cm2 s-1",
+                 "standard error of msd_slope"),
+    VariableSpec("crossover_time", (SWEEP, "body"), "f", "s",
+                 "lag where the ballistic and diffusive fits meet"),
+    VariableSpec("confined_diffusion_coefficient", (SWEEP, "body"), "f", "cm2 s-1",
+                 "D of the confined-square MSD fit (MSD -> 4 D tau)"),
+    VariableSpec("ballistic_window_end", (SWEEP, "body"), "f", "s",
+                 "longest lag of the ballistic fit"),
+    VariableSpec("diffusive_window_start", (SWEEP, "body"), "f", "s",
+                 "shortest lag of the diffusive fit"),
+    VariableSpec("go_events", (SWEEP, "body"), "i", "1", "number of complete go phases"),
+    VariableSpec("stop_events", (SWEEP, "body"), "i", "1", "number of complete stop phases"),
+    VariableSpec("diffusion_coefficient", (SWEEP, "body"), "f", "cm2 s-1",
+                 "msd_slope / 4 (MSD -> 4 D tau convention)"),
+    VariableSpec("msd_slope_theory", (SWEEP, "body"), "f", "cm2 s-1",
+                 "theory's D hat = 2 v0_hat^2 <tau_g>"),
+    VariableSpec("ipr", (SWEEP, "realization", "time"), "f", "1",
+                 "shape index P / sqrt(A) of the membrane"),
+    VariableSpec("ipr_mean", (SWEEP,), "f", "1", "mean shape index"),
+    VariableSpec("gc_distance", (SWEEP,), "f", "cm", "mean distance between bot and cell GCs"),
+    VariableSpec("gc_distance_ratio", (SWEEP,), "f", "1", "gc_distance / R"),
+    VariableSpec("regime", (SWEEP,), "i", "1", "dynamical regime from gc_distance_ratio",
+                 {"flag_values": np.array(list(REGIMES.values()), dtype=np.int8),
+                  "flag_meanings": " ".join(REGIMES)}),
+)}
+
 #: Global attributes every file carries, and those a simulation adds.
 REQUIRED_ATTRS = ("Conventions", "title", "source", "softcell_version", "softcell_origin")
 SIMULATION_ATTRS = ("softcell_parameters", "softcell_parameter_units", "softcell_seed",

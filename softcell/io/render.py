@@ -108,68 +108,24 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
     -------
     RenderInfo
     """
-    for name, value, unit in (("px_per_cm", px_per_cm, "px/cm"), ("fps", fps, "1/s"),
-                              ("band_width", band_width, "cm")):
-        if not (np.isfinite(value) and value > 0):
-            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
-                                f"{unit}")
-    for name, value, unit in (("noise", noise, "grey levels"), ("blur", blur, "px"),
-                              ("illumination", illumination, "1")):
-        if not (np.isfinite(value) and value >= 0):
-            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 "
-                                f"{unit}")
+    _check_render_arguments(px_per_cm=px_per_cm, fps=fps, band_width=band_width, noise=noise,
+                            blur=blur, illumination=illumination)
     path = Path(path)
     fourcc = cv2.VideoWriter_fourcc(*codec(path))
-    validate(ds)
-    for dim, index in {**(point or {}), "realization": realization}.items():
-        if dim not in ds.sizes or not 0 <= index < ds.sizes[dim]:
-            allowed = f"0 .. {ds.sizes[dim] - 1}" if dim in ds.sizes else "not a dimension"
-            raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
-    for dim in ds["bot_x"].dims[:-2]:
-        if dim not in (point or {}):
-            raise SoftcellError(f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
-                                f"one with point {dim}=INDEX (0 .. {ds.sizes[dim] - 1}; "
-                                f"--point on the command line)")
-    sel = ds.isel(point or {}).isel(realization=realization)
-    if not np.isfinite(np.asarray(sel["membrane_x"].values)).any():
-        raise SoftcellError("this realization has no membrane (a free bot): nothing to render")
+    sel = _realization(ds, realization, point)
     time = np.asarray(sel["time"].values, dtype=np.float64)
     valid = np.isfinite(np.asarray(sel["bot_x"].values))
     time_valid = time[valid]
-    t0 = float(time_valid[0] if start is None else start)
-    t1 = float(time_valid[-1] if end is None else end)
-    if not time_valid[0] <= t0 < t1 <= time_valid[-1]:
-        raise SoftcellError(f"render span [{t0}, {t1}] s is not inside the record "
-                            f"[{time_valid[0]}, {time_valid[-1]}] s")
-    times = t0 + np.arange(int(np.floor((t1 - t0) * fps + 1e-9)) + 1) / fps
+    times, notes, coarse, on_grid = _frame_times(time_valid, start, end, fps)
+    t0, t1 = times[0], float(time_valid[-1] if end is None else end)
     mx = np.asarray(sel["membrane_x"].transpose("time", "node").values)[valid]
     my = np.asarray(sel["membrane_y"].transpose("time", "node").values)[valid]
     bx, by = np.asarray(sel["bot_x"].values)[valid], np.asarray(sel["bot_y"].values)[valid]
     angle = np.unwrap(np.asarray(sel["bot_angle"].values)[valid])
     params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
     a, b = float(params.get("bot_semi_major", 3.0)), float(params.get("bot_semi_minor", 2.0))
-    notes = []
-    step = np.diff(time_valid[(time_valid >= t0) & (time_valid <= t1)])
-    coarse = bool(step.size and step.max() > 1.0 / fps * (1 + 1e-9))
-    if coarse:
-        notes.append(f"the record is sampled every {step.max():g} s somewhere in the span, "
-                     f"more coarsely than the video (1/{fps:g} s): frames there are linear "
-                     "interpolations")
-    on_grid = np.isin(np.round(times, 9), np.round(time_valid, 9)).all()
-    if not on_grid:
-        notes.append("frame times fall between samples: states are interpolated linearly")
-    if size is None:
-        span = (time_valid >= t0) & (time_valid <= t1)
-        lo = np.array([np.nanmin(mx[span]), np.nanmin(my[span])]) - 2.0
-        hi = np.array([np.nanmax(mx[span]), np.nanmax(my[span])]) + 2.0
-        width, height = (2 * np.ceil((hi - lo) * px_per_cm / 2)).astype(int)
-        frame = Frame(px_per_cm, int(width), int(height), float(lo[0]), float(lo[1]))
-    else:
-        width, height = int(size[0]), int(size[1])
-        cx, cy = float(np.mean(mx[0])), float(np.mean(my[0]))
-        frame = Frame(px_per_cm, width, height, cx - width / (2 * px_per_cm),
-                      cy - height / (2 * px_per_cm))
-    _check_frame_size(frame)
+    span = (time_valid >= t0) & (time_valid <= t1)
+    frame = _frame_for(mx, my, span, px_per_cm, size)
     rng = np.random.default_rng(seed)
     background = _background(frame, illumination)
     from tqdm.auto import tqdm
@@ -208,6 +164,83 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
             raise StorageError(f"cannot write {path}: {problem} ({written} of {times.size} "
                                "frames read back)")
     return RenderInfo(path, times, frame, not on_grid, coarse, notes)
+
+def _check_render_arguments(**values: float) -> None:
+    """One line naming the first bad scale, rate, width or image effect."""
+    units = {"px_per_cm": "px/cm", "fps": "1/s", "band_width": "cm", "noise": "grey levels",
+             "blur": "px", "illumination": "1"}
+    for name in ("px_per_cm", "fps", "band_width"):
+        value = values[name]
+        if not (np.isfinite(value) and value > 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
+                                f"{units[name]}")
+    for name in ("noise", "blur", "illumination"):
+        value = values[name]
+        if not (np.isfinite(value) and value >= 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 "
+                                f"{units[name]}")
+
+
+def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None
+                 ) -> xr.Dataset:
+    """The one realization (of one sweep point) to render; a one-line error for an index out
+    of range, a sweep without a chosen point, or a free bot."""
+    validate(ds)
+    for dim, index in {**(point or {}), "realization": realization}.items():
+        if dim not in ds.sizes or not 0 <= index < ds.sizes[dim]:
+            allowed = f"0 .. {ds.sizes[dim] - 1}" if dim in ds.sizes else "not a dimension"
+            raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
+    for dim in ds["bot_x"].dims[:-2]:
+        if dim not in (point or {}):
+            raise SoftcellError(f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
+                                f"one with point {dim}=INDEX (0 .. {ds.sizes[dim] - 1}; "
+                                f"--point on the command line)")
+    sel = ds.isel(point or {}).isel(realization=realization)
+    if not np.isfinite(np.asarray(sel["membrane_x"].values)).any():
+        raise SoftcellError("this realization has no membrane (a free bot): nothing to render")
+    return sel
+
+
+def _frame_times(time_valid: np.ndarray, start: float | None, end: float | None, fps: float
+                 ) -> tuple[np.ndarray, list[str], bool, bool]:
+    """The frame times (s) in [start, end], notes on interpolation, whether the record is
+    coarser than the video somewhere, and whether every frame falls on a sample."""
+    t0 = float(time_valid[0] if start is None else start)
+    t1 = float(time_valid[-1] if end is None else end)
+    if not time_valid[0] <= t0 < t1 <= time_valid[-1]:
+        raise SoftcellError(f"render span [{t0}, {t1}] s is not inside the record "
+                            f"[{time_valid[0]}, {time_valid[-1]}] s")
+    times = t0 + np.arange(int(np.floor((t1 - t0) * fps + 1e-9)) + 1) / fps
+    notes = []
+    step = np.diff(time_valid[(time_valid >= t0) & (time_valid <= t1)])
+    coarse = bool(step.size and step.max() > 1.0 / fps * (1 + 1e-9))
+    if coarse:
+        notes.append(f"the record is sampled every {step.max():g} s somewhere in the span, "
+                     f"more coarsely than the video (1/{fps:g} s): frames there are linear "
+                     "interpolations")
+    on_grid = np.isin(np.round(times, 9), np.round(time_valid, 9)).all()
+    if not on_grid:
+        notes.append("frame times fall between samples: states are interpolated linearly")
+    return times, notes, coarse, on_grid
+
+
+def _frame_for(mx: np.ndarray, my: np.ndarray, span: np.ndarray, px_per_cm: float,
+               size: tuple[int, int] | None) -> Frame:
+    """The pixel geometry: the region the membrane visits during ``span`` with a 2 cm margin,
+    or ``size`` (px) centred on the first shape."""
+    if size is None:
+        lo = np.array([np.nanmin(mx[span]), np.nanmin(my[span])]) - 2.0
+        hi = np.array([np.nanmax(mx[span]), np.nanmax(my[span])]) + 2.0
+        width, height = (2 * np.ceil((hi - lo) * px_per_cm / 2)).astype(int)
+        frame = Frame(px_per_cm, int(width), int(height), float(lo[0]), float(lo[1]))
+    else:
+        width, height = int(size[0]), int(size[1])
+        cx, cy = float(np.mean(mx[0])), float(np.mean(my[0]))
+        frame = Frame(px_per_cm, width, height, cx - width / (2 * px_per_cm),
+                      cy - height / (2 * px_per_cm))
+    _check_frame_size(frame)
+    return frame
+
 
 def _check_frame_size(frame: Frame) -> None:
     for side, value in (("width", frame.width), ("height", frame.height)):

@@ -106,8 +106,9 @@ def active_points(hww, hwp, active):
     return n_active
 
 
+# A compiled inner loop: exempt from the complexity limit of the rest of the code.
 @njit(**JIT)
-def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index, active,
+def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index, active,  # noqa: C901
                       n_active, buf_a, buf_b, scratch, a_hat, b_hat, g_hat, cal_a, cal_b,
                       factors, orders, jac):
     """Add to ``jac`` (float64[n_u, n_u], 1/s) the energy terms' part of the Jacobian, from

@@ -212,9 +212,9 @@ def _make_grid_functions(partials, hessian, scan):
     return forces, jacobian
 
 
-def _make_loop(smooth_group, fine_group, drive):
-    """The compiled right-hand side, Jacobian and time loop. Each group is (partials,
-    hessian, present, order) for the smooth terms (coarse grid) and the others (N points)."""
+def _make_rhs(smooth_group, fine_group, drive):
+    """The compiled right-hand side and its Jacobian. Each group is (partials, hessian,
+    present, order, scan) for the smooth terms (coarse grid) and the others (N points)."""
     forces_s, jacobian_s = _make_grid_functions(smooth_group[0], smooth_group[1], True)
     forces_f, jacobian_f = _make_grid_functions(fine_group[0], fine_group[1], fine_group[4])
     has_s, order_s = smooth_group[2], smooth_group[3]
@@ -266,6 +266,14 @@ def _make_loop(smooth_group, fine_group, drive):
         for c in range(3):
             for d in range(3):
                 ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
+
+    return rhs, jacobian
+
+
+def _make_loop(rhs, jacobian):  # noqa: C901 (its complexity is the compiled advance_to)
+    """The compiled time loop around :func:`_make_rhs`'s right-hand side and Jacobian: steps
+    of the generic Rosenbrock method with RODAS4's tableau, step-size control, landing on
+    the protocol's switches, and samples from the continuous extension."""
 
     @njit(**JIT_COMPOSED)
     def stage_rhs(y, out, args):
@@ -364,7 +372,7 @@ def _make_loop(smooth_group, fine_group, drive):
                 return status
         return OK
 
-    return rhs, jacobian, integrate
+    return integrate
 
 
 _LOOPS: dict[tuple, tuple] = {}
@@ -394,7 +402,8 @@ def compiled_loop(model: Model) -> tuple:
         built = [(compose_partials(kernels), compose_hessians(terms), bool(terms), order,
                   any(t.hessian_kernel() is None for t in terms))
                  for kernels, terms, order in parts]
-        _LOOPS[key_t] = _make_loop(built[0], built[1], model.drive)
+        rhs, jacobian = _make_rhs(built[0], built[1], model.drive)
+        _LOOPS[key_t] = (rhs, jacobian, _make_loop(rhs, jacobian))
     return _LOOPS[key_t]
 
 

@@ -29,12 +29,11 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
-from softcell.core.schema import REGIMES, STOPGO_FLAGS, STOPGO_MEANINGS
+from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
 from softcell.errors import SoftcellError
 
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
-#: Regime flags of the ``regime`` variable.
 #: Scaling-collapse variants (docs/model.md §6): MSD * R^a against lag * R^b.
 COLLAPSE_VARIANTS = ((1 / 3, 1.0), (1 / 3, -1.0), (-1 / 3, 1.0), (-1 / 3, -1.0))
 COLLAPSE_GRID = 50
@@ -163,6 +162,235 @@ def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndar
     return out
 
 
+#: Per-(point, body) scalars of :func:`_body_statistics` (float, NaN when undefined).
+SCALARS = ("mean_speed", "v0_hat", "mean_go_duration", "mean_stop_duration", "go_fraction",
+           "go_ks_statistic", "go_ks_pvalue", "stop_ks_statistic", "stop_ks_pvalue",
+           "ballistic_velocity", "ballistic_velocity_error", "msd_slope", "msd_slope_error",
+           "crossover_time", "confined_diffusion_coefficient", "ballistic_window_end",
+           "diffusive_window_start")
+
+
+class _Setup:
+    """What every point of one analysis shares: options, detectors, the kept times, lags."""
+
+    def __init__(self, ds: xr.Dataset, options: Mapping[str, Any] | None) -> None:
+        opts = analysis_options(options)
+        require(ds)
+        self.opts = opts
+        self.origin = ds.attrs.get("softcell_origin", "simulation")
+        threshold = opts["threshold"]
+        if threshold is None and self.origin == "tracking" and opts["detector"] == "threshold":
+            threshold = stopgo.EXPERIMENT_THRESHOLD
+        self.detector = _detector(opts["detector"], threshold)
+        self.threshold = self.detector.params.get("threshold", threshold)
+        self.shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
+        self.shifted = [_detector(opts["detector"], self.threshold + s)
+                        if self.threshold is not None and self.threshold + s >= 0 else None
+                        for s in self.shifts]
+        time_all = np.asarray(ds["time"].values, dtype=np.float64)
+        self.keep = time_all >= time_all[0] + opts["discard"]
+        self.time = time_all[self.keep]
+        self.plan = LagPlan(self.time, opts)
+        self.only = segments(self.time).index(self.plan.fine) \
+            if opts["stopgo_segments"] == "finest" else None
+        self.lead = sweep_dims(ds)
+        self.points = _points(ds, self.lead)
+
+
+class _Results:
+    """The per-point arrays of an analysis, filled point by point (leading axis: point)."""
+
+    def __init__(self, setup: _Setup, n_real: int) -> None:
+        shape = (len(setup.points), len(BODIES))
+        n_lag, n_t = setup.plan.lag.size, setup.time.size
+        self.shape = shape
+        self.scalars = {name: np.full(shape, np.nan) for name in SCALARS}
+        self.go_events = np.zeros(shape, dtype=np.int64)
+        self.stop_events = np.zeros(shape, dtype=np.int64)
+        self.msd = np.full((*shape, n_lag), np.nan)
+        self.msd_sem = np.full((*shape, n_lag), np.nan)
+        self.msd_pairs = np.zeros((*shape, n_lag))
+        self.msd_each = np.full((*shape, n_real, n_lag), np.nan)
+        self.speeds = np.full((*shape, n_real, n_t), np.nan)
+        self.labels = np.full((*shape, n_real, n_t), -1, dtype=np.int8)
+        self.shifted_go = np.full((*shape, setup.shifts.size), np.nan)
+        self.shifted_stop = np.full((*shape, setup.shifts.size), np.nan)
+        self.ipr = np.full((len(setup.points), n_real, n_t), np.nan)
+        self.gc_distance = np.full(len(setup.points), np.nan)
+        self.durations: dict[tuple[int, int, int], np.ndarray] = {}
+
+
+def _body_statistics(setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray,
+                     y: np.ndarray) -> None:
+    """Speeds, stop/go, MSD and fits of one body (positions x, y [realization, time], cm)
+    at point i, into row (i, b) of ``res``."""
+    time, opts, plan, only = setup.time, setup.opts, setup.plan, setup.only
+    out = res.scalars
+    s = speed(x, y, time)
+    res.speeds[i, b] = s
+    lab = stopgo.label(setup.detector, s, time)
+    res.labels[i, b] = lab
+    d = stopgo.durations(lab, time, only)
+    for kind, values in ((stopgo.GO, d.go), (stopgo.STOP, d.stop)):
+        res.durations[(i, b, kind)] = values
+    res.go_events[i, b], res.stop_events[i, b] = d.go.size, d.stop.size
+    out["mean_go_duration"][i, b] = d.mean(stopgo.GO)
+    out["mean_stop_duration"][i, b] = d.mean(stopgo.STOP)
+    known = lab[lab >= 0]
+    out["go_fraction"][i, b] = (known == stopgo.GO).mean() if known.size else np.nan
+    for name, values in (("go", d.go), ("stop", d.stop)):
+        stat, p = stopgo.exponential_fit_statistic(values)
+        out[f"{name}_ks_statistic"][i, b], out[f"{name}_ks_pvalue"][i, b] = stat, p
+    for k, det in enumerate(setup.shifted):
+        if det is not None:
+            dk = d if setup.shifts[k] == 0 else stopgo.durations(
+                stopgo.label(det, s, time), time, only)
+            res.shifted_go[i, b, k] = dk.mean(stopgo.GO)
+            res.shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
+    fine_speed = s[:, plan.fine.first:plan.fine.last]
+    finite = fine_speed[np.isfinite(fine_speed)]
+    out["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
+    out["v0_hat"][i, b] = fits.v0_hat(fine_speed)
+
+    pooled, sem, pairs, each = _ensemble_msd(plan, x, y)
+    res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = \
+        pooled, sem, pairs, each
+    tau_g = out["mean_go_duration"][i, b]
+    hi = opts["ballistic_window"] * tau_g
+    lo = opts["diffusive_window"] * tau_g
+    out["ballistic_window_end"][i, b], out["diffusive_window_start"][i, b] = hi, lo
+    if np.isfinite(tau_g):
+        v, v_err, _ = fits.ballistic_velocity(plan.lag, pooled, hi)
+        slope, slope_err, _ = fits.msd_slope(plan.lag, pooled, lo)
+        out["ballistic_velocity"][i, b], out["ballistic_velocity_error"][i, b] = v, v_err
+        out["msd_slope"][i, b], out["msd_slope_error"][i, b] = slope, slope_err
+        out["crossover_time"][i, b] = fits.crossover_time(v, slope)
+        out["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
+            plan.lag, pooled, opts["confined_side"], lo)[0]
+
+
+def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> None:
+    """Everything of point i (the Dataset ``sel``): both bodies, the shape index and the
+    bot-cell distance."""
+    keep = setup.keep
+    pos = {}
+    for b, body in enumerate(BODIES):
+        x = np.asarray(sel[f"{body}_x"].transpose("realization", "time").values)[:, keep]
+        y = np.asarray(sel[f"{body}_y"].transpose("realization", "time").values)[:, keep]
+        pos[body] = (x, y)
+        _body_statistics(setup, res, i, b, x, y)
+    mx = sel["membrane_x"].transpose("realization", "time", "node")
+    my = sel["membrane_y"].transpose("realization", "time", "node")
+    for r in range(res.ipr.shape[1]):
+        res.ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep])
+    (cx, cy), (bx, by) = pos["cell"], pos["bot"]
+    with np.errstate(invalid="ignore"):
+        res.gc_distance[i] = np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(
+            bx - cx).any() else np.nan
+
+
+def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray) -> dict[str, Any]:
+    """What needs every point: durations along ``event``, PDFs of t/<t> on common bins, the
+    theory, and the regime of each point."""
+    shape = res.shape
+    n_event = max([v.size for v in res.durations.values()] + [0])
+    durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
+    largest = 0.0
+    for (i, b, kind), values in res.durations.items():
+        durations[kind][i, b, :values.size] = values
+        if values.size and values.mean() > 0:
+            largest = max(largest, float((values / values.mean()).max()))
+    edges = stopgo.pdf_edges(largest)
+    pdfs = {kind: np.full((*shape, edges.size - 1), np.nan) for kind in durations}
+    for (i, b, kind), values in res.durations.items():
+        pdfs[kind][i, b] = stopgo.scaled_pdf(values, edges)
+
+    v0_hat, tau_g = res.scalars["v0_hat"], res.scalars["mean_go_duration"]
+    msd_theory = np.full(res.msd.shape, np.nan)
+    for i, b in np.ndindex(*shape):
+        if tau_g[i, b] > 0:
+            msd_theory[i, b] = fits.run_and_tumble_msd(setup.plan.lag, v0_hat[i, b], tau_g[i, b])
+    opts = setup.opts
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = res.gc_distance / radius
+    regime = np.full(len(setup.points), REGIMES["unknown"], dtype=np.int8)
+    regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
+    regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = \
+        REGIMES["intermediate"]
+    regime[ratio >= opts["decoupled_above"]] = REGIMES["decoupled"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a point with no membrane: NaN
+        ipr_mean = np.nanmean(res.ipr, axis=(1, 2))
+    return {
+        "msd": res.msd, "msd_sem": res.msd_sem, "msd_pairs": res.msd_pairs,
+        "msd_realization": res.msd_each, "msd_theory": msd_theory, "speed": res.speeds,
+        "stopgo_label": res.labels, "go_duration": durations[stopgo.GO],
+        "stop_duration": durations[stopgo.STOP], "go_pdf": pdfs[stopgo.GO],
+        "stop_pdf": pdfs[stopgo.STOP], "mean_go_duration_shifted": res.shifted_go,
+        "mean_stop_duration_shifted": res.shifted_stop, **res.scalars,
+        "go_events": res.go_events, "stop_events": res.stop_events,
+        "diffusion_coefficient": res.scalars["msd_slope"] / 4,
+        "msd_slope_theory": 2 * v0_hat ** 2 * tau_g, "ipr": res.ipr, "ipr_mean": ipr_mean,
+        "gc_distance": res.gc_distance, "gc_distance_ratio": ratio, "regime": regime,
+        "_edges": edges, "_events": n_event,
+    }
+
+
+def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any]) -> xr.Dataset:
+    """The analysis Dataset of :data:`softcell.core.schema.ANALYSIS_VARIABLES`, back on the
+    sweep's dims."""
+    lead = setup.lead
+    lead_shape = tuple(ds.sizes[d] for d in lead)
+    edges = values["_edges"]
+    out = xr.Dataset(coords={
+        "body": ("body", np.array(BODIES), {"long_name": "moving body: cell (membrane GC) or "
+                                            "bot"}),
+        "lag": ("lag", setup.plan.lag, {"units": "s", "long_name": "time lag"}),
+        "realization": ("realization", np.asarray(ds["realization"].values),
+                        {"units": "1", "long_name": "realization index"}),
+        "time": ("time", setup.time, {"units": "s", "long_name": "time since the start of "
+                                      "the record"}),
+        "event": ("event", np.arange(values["_events"]),
+                  {"units": "1", "long_name": "phase index"}),
+        "scaled_duration": ("scaled_duration", 0.5 * (edges[1:] + edges[:-1]),
+                            {"units": "1", "long_name": "phase duration over its mean, bin "
+                             "center", "bin_width": stopgo.PDF_BIN}),
+        "threshold_shift": ("threshold_shift", setup.shifts,
+                            {"units": "cm s-1", "long_name": "shift of the stop/go threshold"}),
+    })
+    for d in lead:
+        out.coords[d] = (d, ds[d].values, dict(ds[d].attrs))
+    for name, coord in ds.coords.items():  # e.g. duration along radius
+        if name not in lead and coord.dims and set(coord.dims) <= set(lead):
+            out.coords[name] = (coord.dims, coord.values, dict(coord.attrs))
+    for name, spec in ANALYSIS_VARIABLES.items():
+        dims = tuple(lead) + tuple(d for d in spec.dims if d != SWEEP)
+        data = np.asarray(values[name])
+        out[name] = (dims, data.reshape(lead_shape + data.shape[1:]), spec.cf_attrs())
+    return out
+
+
+def _collapse_variables(out: xr.Dataset, setup: _Setup, values: dict[str, Any],
+                        radius: np.ndarray) -> None:
+    """The scaling-collapse variants of a radius sweep, over its decoupled radii."""
+    decoupled = values["regime"] == REGIMES["decoupled"]
+    metric = _collapse(setup.plan.lag, values["msd"][decoupled, 0], radius[decoupled],
+                       values["diffusive_window_start"][decoupled, 0])
+    names = [f"msd R^{a:+.3g}, lag R^{b:+.3g}" for a, b in COLLAPSE_VARIANTS]
+    out.coords["collapse_variant"] = ("collapse_variant", np.array(names),
+                                      {"long_name": "scaling-collapse variant"})
+    out["collapse_msd_exponent"] = ("collapse_variant", [a for a, _ in COLLAPSE_VARIANTS],
+                                    {"units": "1", "long_name": "exponent a of R^a on "
+                                     "the MSD"})
+    out["collapse_lag_exponent"] = ("collapse_variant", [b for _, b in COLLAPSE_VARIANTS],
+                                    {"units": "1", "long_name": "exponent b of R^b on "
+                                     "the lag"})
+    out["collapse_metric"] = ("collapse_variant", metric, {
+        "units": "1", "long_name": "mean spread (decades) of the rescaled cell MSDs of "
+        "the decoupled radii over the ballistic and crossover lags",
+        "radii": radius[decoupled]})
+
+
 def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
             progress: bool = False) -> xr.Dataset:
     """Analyse a simulation or tracked Dataset (docs/model.md §6).
@@ -180,8 +408,9 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     Returns
     -------
     xarray.Dataset
-        The analysis, with CF attributes on every variable and the options, the input's
-        parameters, seed and components in the global attributes.
+        The analysis (:data:`softcell.core.schema.ANALYSIS_VARIABLES`), with CF attributes on
+        every variable and the options, the input's parameters, seed and components in the
+        global attributes.
 
     Raises
     ------
@@ -190,255 +419,23 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     """
     from tqdm.auto import tqdm
 
-    opts = analysis_options(options)
-    require(ds)
-    origin = ds.attrs.get("softcell_origin", "simulation")
-    threshold = opts["threshold"]
-    if threshold is None and origin == "tracking" and opts["detector"] == "threshold":
-        threshold = stopgo.EXPERIMENT_THRESHOLD
-    detector = _detector(opts["detector"], threshold)
-    threshold = detector.params.get("threshold", threshold)
-    shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
-    shifted = [_detector(opts["detector"], threshold + s) if threshold is not None
-               and threshold + s >= 0 else None for s in shifts]
-
-    time_all = np.asarray(ds["time"].values, dtype=np.float64)
-    keep = time_all >= time_all[0] + opts["discard"]
-    time = time_all[keep]
-    plan = LagPlan(time, opts)
-    fine = plan.fine
-    lead = sweep_dims(ds)
-    points = _points(ds, lead)
-    only = segments(time).index(fine) if opts["stopgo_segments"] == "finest" else None
-    n_real = ds.sizes["realization"]
-    n_lag, n_t = plan.lag.size, time.size
-
-    shape = (len(points), len(BODIES))
-    res: dict[str, np.ndarray] = {
-        name: np.full(shape, np.nan) for name in (
-            "mean_speed", "v0_hat", "mean_go_duration", "mean_stop_duration", "go_fraction",
-            "go_ks_statistic", "go_ks_pvalue", "stop_ks_statistic", "stop_ks_pvalue",
-            "ballistic_velocity", "ballistic_velocity_error", "msd_slope", "msd_slope_error",
-            "crossover_time", "confined_diffusion_coefficient", "ballistic_window_end",
-            "diffusive_window_start")}
-    res["go_events"] = np.zeros(shape, dtype=np.int64)
-    res["stop_events"] = np.zeros(shape, dtype=np.int64)
-    msd = np.full((*shape, n_lag), np.nan)
-    msd_sem = np.full((*shape, n_lag), np.nan)
-    msd_pairs = np.zeros((*shape, n_lag))
-    msd_each = np.full((*shape, n_real, n_lag), np.nan)
-    speeds = np.full((*shape, n_real, n_t), np.nan)
-    labels = np.full((*shape, n_real, n_t), -1, dtype=np.int8)
-    shifted_go = np.full((*shape, shifts.size), np.nan)
-    shifted_stop = np.full((*shape, shifts.size), np.nan)
-    ipr = np.full((len(points), n_real, n_t), np.nan)
-    gc_distance = np.full(len(points), np.nan)
-    radius = np.array([_radius(ds, p) for p in points])
-    all_durations: dict[tuple[int, int, int], np.ndarray] = {}
-
-    for i, point in enumerate(tqdm(points, disable=not progress, desc="analysis",
+    setup = _Setup(ds, options)
+    res = _Results(setup, ds.sizes["realization"])
+    radius = np.array([_radius(ds, p) for p in setup.points])
+    for i, point in enumerate(tqdm(setup.points, disable=not progress, desc="analysis",
                                    unit="point")):
-        sel = ds.isel(point) if point else ds
-        pos = {}
-        for b, body in enumerate(BODIES):
-            x = np.asarray(sel[f"{body}_x"].transpose("realization", "time").values)[:, keep]
-            y = np.asarray(sel[f"{body}_y"].transpose("realization", "time").values)[:, keep]
-            pos[body] = (x, y)
-            s = speed(x, y, time)
-            speeds[i, b] = s
-            lab = stopgo.label(detector, s, time)
-            labels[i, b] = lab
-            d = stopgo.durations(lab, time, only)
-            for kind, values in ((stopgo.GO, d.go), (stopgo.STOP, d.stop)):
-                all_durations[(i, b, kind)] = values
-            res["go_events"][i, b], res["stop_events"][i, b] = d.go.size, d.stop.size
-            res["mean_go_duration"][i, b] = d.mean(stopgo.GO)
-            res["mean_stop_duration"][i, b] = d.mean(stopgo.STOP)
-            known = lab[lab >= 0]
-            res["go_fraction"][i, b] = (known == stopgo.GO).mean() if known.size else np.nan
-            for name, values in (("go", d.go), ("stop", d.stop)):
-                stat, p = stopgo.exponential_fit_statistic(values)
-                res[f"{name}_ks_statistic"][i, b], res[f"{name}_ks_pvalue"][i, b] = stat, p
-            for k, det in enumerate(shifted):
-                if det is not None:
-                    dk = d if shifts[k] == 0 else stopgo.durations(
-                        stopgo.label(det, s, time), time, only)
-                    shifted_go[i, b, k] = dk.mean(stopgo.GO)
-                    shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
-            fine_speed = s[:, fine.first:fine.last]
-            finite = fine_speed[np.isfinite(fine_speed)]
-            res["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
-            res["v0_hat"][i, b] = fits.v0_hat(fine_speed)
-
-            pooled, sem, pairs, each = _ensemble_msd(plan, x, y)
-            msd[i, b], msd_sem[i, b], msd_pairs[i, b], msd_each[i, b] = pooled, sem, pairs, each
-            tau_g = res["mean_go_duration"][i, b]
-            hi = opts["ballistic_window"] * tau_g
-            lo = opts["diffusive_window"] * tau_g
-            res["ballistic_window_end"][i, b], res["diffusive_window_start"][i, b] = hi, lo
-            if np.isfinite(tau_g):
-                v, v_err, _ = fits.ballistic_velocity(plan.lag, pooled, hi)
-                slope, slope_err, _ = fits.msd_slope(plan.lag, pooled, lo)
-                res["ballistic_velocity"][i, b], res["ballistic_velocity_error"][i, b] = v, v_err
-                res["msd_slope"][i, b], res["msd_slope_error"][i, b] = slope, slope_err
-                res["crossover_time"][i, b] = fits.crossover_time(v, slope)
-                res["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
-                    plan.lag, pooled, opts["confined_side"], lo)[0]
-        mx = sel["membrane_x"].transpose("realization", "time", "node")
-        my = sel["membrane_y"].transpose("realization", "time", "node")
-        for r in range(n_real):
-            ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep])
-        (cx, cy), (bx, by) = pos["cell"], pos["bot"]
-        with np.errstate(invalid="ignore"):
-            gc_distance[i] = np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(
-                bx - cx).any() else np.nan
-
-    # Durations along `event`, and PDFs of t/<t> on bins covering every value.
-    n_event = max([v.size for v in all_durations.values()] + [0])
-    durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
-    largest = 0.0
-    for (i, b, kind), values in all_durations.items():
-        durations[kind][i, b, :values.size] = values
-        if values.size and values.mean() > 0:
-            largest = max(largest, float((values / values.mean()).max()))
-    edges = stopgo.pdf_edges(largest)
-    pdfs = {kind: np.full((*shape, edges.size - 1), np.nan) for kind in durations}
-    for (i, b, kind), values in all_durations.items():
-        pdfs[kind][i, b] = stopgo.scaled_pdf(values, edges)
-
-    tau_g = res["mean_go_duration"]
-    theory_slope = 2 * res["v0_hat"] ** 2 * tau_g
-    msd_theory = np.full(msd.shape, np.nan)
-    for i, b in np.ndindex(*shape):
-        if tau_g[i, b] > 0:
-            msd_theory[i, b] = fits.run_and_tumble_msd(plan.lag, res["v0_hat"][i, b], tau_g[i, b])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = gc_distance / radius
-    regime = np.full(len(points), REGIMES["unknown"], dtype=np.int8)
-    regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
-    regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = \
-        REGIMES["intermediate"]
-    regime[ratio >= opts["decoupled_above"]] = REGIMES["decoupled"]
-
-    # Back from points to the sweep dims.
-    lead_shape = tuple(ds.sizes[d] for d in lead)
-
-    def unpoint(a: np.ndarray) -> np.ndarray:
-        return a.reshape(lead_shape + a.shape[1:])
-
-    L = tuple(lead)
-    B = (*L, "body")
-    out = xr.Dataset(coords={
-        "body": ("body", np.array(BODIES), {"long_name": "moving body: cell (membrane GC) or "
-                                            "bot"}),
-        "lag": ("lag", plan.lag, {"units": "s", "long_name": "time lag"}),
-        "realization": ("realization", np.asarray(ds["realization"].values),
-                        {"units": "1", "long_name": "realization index"}),
-        "time": ("time", time, {"units": "s", "long_name": "time since the start of the "
-                                "record"}),
-        "event": ("event", np.arange(n_event), {"units": "1", "long_name": "phase index"}),
-        "scaled_duration": ("scaled_duration", 0.5 * (edges[1:] + edges[:-1]),
-                            {"units": "1", "long_name": "phase duration over its mean, bin "
-                             "center", "bin_width": stopgo.PDF_BIN}),
-        "threshold_shift": ("threshold_shift", shifts,
-                            {"units": "cm s-1", "long_name": "shift of the stop/go threshold"}),
-    })
-    for d in lead:
-        out.coords[d] = (d, ds[d].values, dict(ds[d].attrs))
-    for name, coord in ds.coords.items():  # e.g. duration along radius
-        if name not in lead and coord.dims and set(coord.dims) <= set(lead):
-            out.coords[name] = (coord.dims, coord.values, dict(coord.attrs))
-
-    def put(name, dims, data, units, long_name, **attrs):
-        out[name] = (dims, unpoint(np.asarray(data)), {"units": units, "long_name": long_name,
-                                                       **attrs})
-
-    put("msd", (*B, "lag"), msd, "cm2", "mean-squared displacement, pooled over realizations")
-    put("msd_sem", (*B, "lag"), msd_sem, "cm2",
-        "standard error of the MSD across realizations")
-    put("msd_pairs", (*B, "lag"), msd_pairs, "1", "number of displacement pairs")
-    put("msd_realization", (*B, "realization", "lag"), msd_each, "cm2",
-        "mean-squared displacement of each realization")
-    put("msd_theory", (*B, "lag"), msd_theory, "cm2",
-        "run-and-tumble theory 2 v0_hat^2 (tau <tau_g> - <tau_g>^2 (1 - exp(-tau/<tau_g>)))")
-    put("speed", (*B, "realization", "time"), speeds, "cm s-1",
-        "speed, forward difference within a sampling segment")
-    put("stopgo_label", (*B, "realization", "time"), labels, "1", "stop/go label",
-        flag_values=STOPGO_FLAGS, flag_meanings=STOPGO_MEANINGS)
-    put("go_duration", (*B, "event"), durations[stopgo.GO], "s",
-        "duration of a complete go phase, (n - 1) dt")
-    put("stop_duration", (*B, "event"), durations[stopgo.STOP], "s",
-        "duration of a complete stop phase, (n - 1) dt")
-    put("go_pdf", (*B, "scaled_duration"), pdfs[stopgo.GO], "1",
-        "probability density of go durations over their mean")
-    put("stop_pdf", (*B, "scaled_duration"), pdfs[stopgo.STOP], "1",
-        "probability density of stop durations over their mean")
-    put("mean_go_duration_shifted", (*B, "threshold_shift"), shifted_go, "s",
-        "mean go duration with the threshold shifted")
-    put("mean_stop_duration_shifted", (*B, "threshold_shift"), shifted_stop, "s",
-        "mean stop duration with the threshold shifted")
-    units = {"mean_speed": ("cm s-1", "mean speed (finest sampling segment)"),
-             "v0_hat": ("cm s-1", "root mean square speed sqrt(mean^2 + variance), stops "
-                        "included (theory's v0 hat)"),
-             "mean_go_duration": ("s", "mean go duration <tau_g>"),
-             "mean_stop_duration": ("s", "mean stop duration <tau_s>"),
-             "go_fraction": ("1", "fraction of labelled samples that are go"),
-             "go_ks_statistic": ("1", "Kolmogorov-Smirnov distance of t/<t> (go) to exp(-t')"),
-             "go_ks_pvalue": ("1", "p-value of go_ks_statistic (fully specified law)"),
-             "stop_ks_statistic": ("1", "Kolmogorov-Smirnov distance of t/<t> (stop) to "
-                                   "exp(-t')"),
-             "stop_ks_pvalue": ("1", "p-value of stop_ks_statistic (fully specified law)"),
-             "ballistic_velocity": ("cm s-1", "v of the fit MSD = v^2 tau^2 at short lags"),
-             "ballistic_velocity_error": ("cm s-1", "standard error of ballistic_velocity"),
-             "msd_slope": ("cm2 s-1", "D hat of the fit MSD = D hat tau at long lags (the "
-                           "paper's D hat)"),
-             "msd_slope_error": ("cm2 s-1", "standard error of msd_slope"),
-             "crossover_time": ("s", "lag where the ballistic and diffusive fits meet"),
-             "confined_diffusion_coefficient": ("cm2 s-1", "D of the confined-square MSD fit "
-                                                "(MSD -> 4 D tau)"),
-             "ballistic_window_end": ("s", "longest lag of the ballistic fit"),
-             "diffusive_window_start": ("s", "shortest lag of the diffusive fit"),
-             "go_events": ("1", "number of complete go phases"),
-             "stop_events": ("1", "number of complete stop phases")}
-    for name, (unit, long_name) in units.items():
-        put(name, B, res[name], unit, long_name)
-    put("diffusion_coefficient", B, res["msd_slope"] / 4, "cm2 s-1",
-        "msd_slope / 4 (MSD -> 4 D tau convention)")
-    put("msd_slope_theory", B, theory_slope, "cm2 s-1",
-        "theory's D hat = 2 v0_hat^2 <tau_g>")
-    put("ipr", (*L, "realization", "time"), ipr, "1",
-        "shape index P / sqrt(A) of the membrane")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # a point with no membrane: NaN
-        put("ipr_mean", L, np.nanmean(ipr, axis=(1, 2)), "1", "mean shape index")
-    put("gc_distance", L, gc_distance, "cm", "mean distance between bot and cell GCs")
-    put("gc_distance_ratio", L, ratio, "1", "gc_distance / R")
-    put("regime", L, regime, "1", "dynamical regime from gc_distance_ratio",
-        flag_values=np.array(list(REGIMES.values()), dtype=np.int8),
-        flag_meanings=" ".join(REGIMES))
-    if "radius" in lead and len(lead) == 1:
-        decoupled = regime == REGIMES["decoupled"]
-        metric = _collapse(plan.lag, msd[decoupled, 0], radius[decoupled],
-                           res["diffusive_window_start"][decoupled, 0])
-        names = [f"msd R^{a:+.3g}, lag R^{b:+.3g}" for a, b in COLLAPSE_VARIANTS]
-        out.coords["collapse_variant"] = ("collapse_variant", np.array(names),
-                                          {"long_name": "scaling-collapse variant"})
-        out["collapse_msd_exponent"] = ("collapse_variant", [a for a, _ in COLLAPSE_VARIANTS],
-                                        {"units": "1", "long_name": "exponent a of R^a on "
-                                         "the MSD"})
-        out["collapse_lag_exponent"] = ("collapse_variant", [b for _, b in COLLAPSE_VARIANTS],
-                                        {"units": "1", "long_name": "exponent b of R^b on "
-                                         "the lag"})
-        out["collapse_metric"] = ("collapse_variant", metric, {
-            "units": "1", "long_name": "mean spread (decades) of the rescaled cell MSDs of "
-            "the decoupled radii over the ballistic and crossover lags",
-            "radii": radius[decoupled]})
+        _point_statistics(setup, res, i, ds.isel(point) if point else ds)
+    values = _pooled_statistics(setup, res, radius)
+    out = _analysis_dataset(ds, setup, values)
+    if "radius" in setup.lead and len(setup.lead) == 1:
+        _collapse_variables(out, setup, values, radius)
+    opts = setup.opts
     out.attrs = {
         "Conventions": "CF-1.8", "title": "soft robotic cell analysis",
         "source": f"softcell {__version__} analysis", "softcell_version": __version__,
-        "softcell_origin": "analysis", "softcell_input_origin": origin,
+        "softcell_origin": "analysis", "softcell_input_origin": setup.origin,
         "softcell_detector": opts["detector"],
-        "softcell_threshold": np.nan if threshold is None else float(threshold),
+        "softcell_threshold": np.nan if setup.threshold is None else float(setup.threshold),
         **options_attrs(opts),
         **{k: v for k, v in ds.attrs.items() if k in (
             "softcell_parameters", "softcell_parameter_units", "softcell_seed",
