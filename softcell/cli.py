@@ -135,7 +135,7 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 def _cmd_params(args: argparse.Namespace) -> int:
     from softcell.core.limits import check_run
 
-    config = _config(args)
+    config = _config(args).updated(components=_component_flags(args))
     config.check_components()
     points = expand_sweep(config.parameters, config.extra_specs())
     for _, params in points:
@@ -308,8 +308,16 @@ def _add_plugins(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.set_defaults(func=_cmd_plugins)
 
 
+def _add_component_choice(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
+    p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
+                   "paper's scheme, the reference)")
+    p.add_argument("--energy-terms", help="comma-separated energy terms")
+
+
 def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
+    _add_component_choice(p)
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
     _add_component_flags(p, specs)
     p.set_defaults(func=_cmd_params)
@@ -322,10 +330,7 @@ def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("--realizations", type=int, help="realizations per parameter point")
     p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
     _add_cluster_flags(p, "local worker processes (default 1; more: a local dask cluster)")
-    p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
-    p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
-                   "paper's scheme, the reference)")
-    p.add_argument("--energy-terms", help="comma-separated energy terms")
+    _add_component_choice(p)
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
     p.add_argument("--overwrite", action="store_true",
                    help="recompute files in OUT made with other settings (and remove "

@@ -109,3 +109,16 @@ def test_hook_docs_mention_units():
     for hook in KINDS:
         doc = textwrap.dedent(getattr(hookspecs, hook).__doc__)
         assert "Returns" in doc and "Called once" in doc
+
+
+def test_parameters_know_an_installed_components_parameters():
+    from fakeplugins import good
+
+    from softcell.core.params import Parameters
+
+    with pytest.raises(ConfigError, match="unknown parameter 'fake_level'"):
+        Parameters({"fake_level": 2.0})
+    with registered(good):
+        assert Parameters({"fake_level": 2.0}).fake_level == 2.0
+        with pytest.raises(ConfigError, match=r"'fake_levl' \(did you mean 'fake_level'\?\)"):
+            Parameters({"fake_levl": 2.0})
