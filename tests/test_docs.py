@@ -3,6 +3,8 @@
 import inspect
 from pathlib import Path
 
+import pytest
+
 from softcell.core.plugin import hookspecs
 from softcell.core.plugin.contracts import CONTRACTS
 from softcell.core.plugin.registry import KINDS
@@ -59,3 +61,54 @@ def test_docstrings_cite_sections_that_exist():
         for first, last in re.findall(r"model\.md §(\d+)(?:-(\d+))?", path.read_text()):
             cited |= {str(n) for n in range(int(first), int(last or first) + 1)}
     assert cited and cited <= sections, cited - sections
+
+
+def documented_commands() -> list[tuple[str, str]]:
+    """Every ``softcell`` command line of the Markdown pages (continuations joined, comments
+    and pipes dropped), with the page it is on."""
+    import re
+    import shlex
+
+    root = Path(__file__).parents[1]
+    pages = [root / "README.md", *sorted((root / "docs").glob("*.md")),
+             root / "examples" / "plugin" / "README.md"]
+    found = []
+    for page in pages:
+        for block in re.findall(r"```(?:console|bash)\n(.*?)```", page.read_text(), flags=re.S):
+            text = block.replace("\\\n", " ")
+            for line in text.splitlines():
+                line = line.strip().removeprefix("$ ")
+                if line.startswith("softcell "):
+                    words = shlex.split(line.split("|")[0], comments=True)
+                    found.append((page.name, shlex.join(words[1:])))
+    return found
+
+
+COMMANDS = documented_commands()
+
+
+def test_the_documented_commands_are_found():
+    assert len(COMMANDS) >= 15
+
+
+@pytest.mark.parametrize("page, line", COMMANDS, ids=[f"{p}: {c[:40]}" for p, c in COMMANDS])
+def test_documented_commands_parse(page, line):
+    """Each documented command line is one the command line accepts (the example plugin's
+    components registered, as its pages assume it is installed)."""
+    import shlex
+    import sys
+
+    from softcell.cli import parse_arguments
+    from softcell.testing import registered
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "examples" / "plugin" / "src"))
+    try:
+        from softcell_example import plugin
+    finally:
+        sys.path.pop(0)
+    with registered(plugin, name="example"):
+        args = parse_arguments(shlex.split(line))
+    assert callable(args.func)
+    for source in getattr(args, "inputs", None) or []:  # the data-safety rule of analyze
+        assert Path(source) not in Path(args.output).parents, (
+            f"{page}: `softcell {line}` writes inside its input {source}")
