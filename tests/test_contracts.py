@@ -11,7 +11,7 @@ import softcell
 from softcell.cli import main
 from softcell.core.engine import build_model
 from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Schedule
+from softcell.core.plugin.contracts import EnergyTerm
 from softcell.errors import ContractError
 from softcell.plugins.run_and_tumble import RunAndTumble
 from softcell.testing import registered
@@ -95,10 +95,41 @@ def test_the_command_line_reports_it_in_one_line_with_exit_2(tmp_path, capsys):
     assert not list(tmp_path.glob("*.nc"))
 
 
-def test_every_builtin_meets_its_contract():
-    """The built-ins compile for the declared signatures (the contract describes the engine)."""
-    model = build_model(Parameters({"radius": 4.0}), ["bending", "tension", "contact"],
-                        "pivot_run_and_tumble")
-    for term in model.terms:
-        assert len(term.partials_kernel().signatures) >= 1
-    assert isinstance(model.protocol, DrivingProtocol) and Schedule is not None
+ENGINE_TYPES = """
+import json
+from softcell.core.engine import build_integrator, build_model
+from softcell.core.params import Parameters
+from softcell.core.plugin.registry import get_registry
+from softcell.core.realization import realization_rng, run_realization
+
+counts = {}
+for integrator, protocol, extra in (("rodas4", "run_and_tumble", {}),
+                                    ("explicit_euler", "pivot_run_and_tumble", {"dt": 1e-6})):
+    params = Parameters({"radius": 4.0, "duration": 0.01, "cutoff": 4, "nodes": 64,
+                         "stored_nodes": 16, **extra}, get_registry().parameter_specs().values())
+    model = build_model(params, ["bending", "tension", "contact"], protocol)
+    run_realization(model, build_integrator(integrator, params).build(model),
+                    realization_rng(0, 0, 0))
+    for component in (*model.terms, model.protocol):
+        for method in type(component).kernels:
+            kernel = getattr(component, method)()
+            if kernel is not None:
+                counts[f"{component.name}.{method}"] = len(kernel.overloads)
+print(json.dumps(counts))
+"""
+
+
+@pytest.mark.slow
+def test_the_contract_signatures_are_the_types_the_engine_calls_with():
+    """In a new process, after both integrators have run, every built-in kernel has exactly
+    one compiled signature: the contract's. A declared signature other than the engine's
+    types would leave two (the check's and the engine's)."""
+    import json
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-c", ENGINE_TYPES], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    counts = json.loads(run.stdout.strip().splitlines()[-1])
+    assert len(counts) == 8  # 3 terms x (partials, hessian) and 2 drives
+    assert set(counts.values()) == {1}, counts

@@ -18,9 +18,7 @@ from softcell.config import CHECKPOINT_EVERY
 from softcell.core.engine.model import Model
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
 from softcell.core.plugin.contracts import Stepper
-from softcell.core.schema import simulation_dataset
 from softcell.errors import Interrupted
-from softcell.kernels.spectral import resample
 
 #: Samples handed to the stepper per call (progress, checks and checkpoints happen between
 #: calls): 1 s of simulated time at the paper's early sampling.
@@ -130,6 +128,10 @@ def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
                    components: dict[str, object], extra_attrs: dict[str, object] | None = None):
     """The simulation Dataset (schema of :mod:`softcell.core.schema`) of one realization."""
+    # Imported here: the loop above needs no xarray (about 70 MiB), only the Dataset does.
+    from softcell.core.schema import simulation_dataset
+    from softcell.kernels.spectral import resample
+
     nodes = int(model.params.stored_nodes)
     if model.has_membrane:
         mx, my = resample(record.modes, nodes)

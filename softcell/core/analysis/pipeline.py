@@ -289,9 +289,11 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
             bx - cx).any() else np.nan
 
 
-def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray) -> dict[str, Any]:
+def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray
+                       ) -> tuple[dict[str, Any], np.ndarray]:
     """What needs every point: durations along ``event``, PDFs of t/<t> on common bins, the
-    theory, and the regime of each point."""
+    theory, and the regime of each point. Returns every variable of the analysis by name, and
+    the edges of the PDF bins."""
     shape = res.shape
     n_event = max([v.size for v in res.durations.values()] + [0])
     durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
@@ -332,16 +334,15 @@ def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray) -> dict
         "diffusion_coefficient": res.scalars["msd_slope"] / 4,
         "msd_slope_theory": 2 * v0_hat ** 2 * tau_g, "ipr": res.ipr, "ipr_mean": ipr_mean,
         "gc_distance": res.gc_distance, "gc_distance_ratio": ratio, "regime": regime,
-        "_edges": edges, "_events": n_event,
-    }
+    }, edges
 
 
-def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any]) -> xr.Dataset:
+def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any],
+                      edges: np.ndarray) -> xr.Dataset:
     """The analysis Dataset of :data:`softcell.core.schema.ANALYSIS_VARIABLES`, back on the
     sweep's dims."""
     lead = setup.lead
     lead_shape = tuple(ds.sizes[d] for d in lead)
-    edges = values["_edges"]
     out = xr.Dataset(coords={
         "body": ("body", np.array(BODIES), {"long_name": "moving body: cell (membrane GC) or "
                                             "bot"}),
@@ -350,7 +351,7 @@ def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any]) -> 
                         {"units": "1", "long_name": "realization index"}),
         "time": ("time", setup.time, {"units": "s", "long_name": "time since the start of "
                                       "the record"}),
-        "event": ("event", np.arange(values["_events"]),
+        "event": ("event", np.arange(values["go_duration"].shape[-1]),
                   {"units": "1", "long_name": "phase index"}),
         "scaled_duration": ("scaled_duration", 0.5 * (edges[1:] + edges[:-1]),
                             {"units": "1", "long_name": "phase duration over its mean, bin "
@@ -425,8 +426,8 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     for i, point in enumerate(tqdm(setup.points, disable=not progress, desc="analysis",
                                    unit="point")):
         _point_statistics(setup, res, i, ds.isel(point) if point else ds)
-    values = _pooled_statistics(setup, res, radius)
-    out = _analysis_dataset(ds, setup, values)
+    values, edges = _pooled_statistics(setup, res, radius)
+    out = _analysis_dataset(ds, setup, values, edges)
     if "radius" in setup.lead and len(setup.lead) == 1:
         _collapse_variables(out, setup, values, radius)
     opts = setup.opts
