@@ -1,3 +1,3 @@
-from softcell.cli import main
+from softcell.cli import entry
 
-raise SystemExit(main())
+entry()

@@ -52,3 +52,8 @@ class Interrupted(KeyboardInterrupt):
 
 class PluginWarning(UserWarning):
     """A plugin was skipped because it failed to import or to register."""
+
+
+class CacheWarning(UserWarning):
+    """The compiled-model cache could not be used as is: a corrupt entry rebuilt, or a
+    composition compiled in memory only because a bound function cannot be identified."""

@@ -23,12 +23,17 @@ Building blocks
     :func:`alternating_schedule`; :class:`ExplicitEulerStepper` (the explicit scheme, for an
     integrator that only chooses its step) and :func:`explicit_decay_rate` (its stability
     bound).
+Compiling once per machine
+    :func:`compile_module` runs generated source with compiled functions bound into it and
+    caches its compiled functions on disk, keyed by the bound code (what the built-in
+    integrators compose their loops with); :class:`CacheWarning` is what it warns with.
 Testing
     :func:`registered` registers plugin modules for the duration of a ``with`` block.
 """
 
 from __future__ import annotations
 
+from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.model import Model
 from softcell.core.engine.reference import explicit_decay_rate
 from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
@@ -44,7 +49,7 @@ from softcell.core.plugin.contracts import (
 from softcell.core.plugin.hookspecs import hookimpl
 from softcell.core.plugin.registry import registered
 from softcell.core.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
-from softcell.errors import ContractError, ParameterError
+from softcell.errors import CacheWarning, ContractError, ParameterError
 from softcell.plugins.explicit_euler import ExplicitEulerStepper
 from softcell.plugins.run_and_tumble import (
     PivotRunAndTumble,
@@ -62,6 +67,7 @@ __all__ = [
     "PHASE_UNKNOWN",
     "STOP",
     "STOPGO_UNKNOWN",
+    "CacheWarning",
     "Component",
     "ContractError",
     "DrivingProtocol",
@@ -78,6 +84,7 @@ __all__ = [
     "Stepper",
     "StopGoDetector",
     "alternating_schedule",
+    "compile_module",
     "explicit_decay_rate",
     "hookimpl",
     "pivot_drive",

@@ -11,6 +11,7 @@ from softcell.core.engine import (
     build_model,
     circle_modes,
     equilibrium_radius,
+    fd_hessian,
     force_modes,
     initial_state,
 )
@@ -18,7 +19,6 @@ from softcell.core.params import MODEL_PARAMETERS, Parameters
 from softcell.core.plugin.contracts import EnergyTerm
 from softcell.core.plugin.registry import get_registry
 from softcell.core.realization import realization_rng
-from softcell.kernels.jacobian import make_fd_hessian
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
 from softcell.testing import registered
@@ -82,7 +82,7 @@ def test_analytic_second_derivatives_match_the_fallback(name):
     term.hessian_kernel()(*w, pose, model.context, coefficients, *analytic)
     fallback = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
     steps = np.array([1e-7 * 4.0] * 8 + [1e-7])
-    make_fd_hessian(term.partials_kernel())(
+    fd_hessian(term.partials_kernel())(
         w.copy(), pose, model.context, coefficients, steps, np.zeros(n), np.zeros((6, n)),
         np.zeros((6, n)), np.zeros(3), np.zeros(3), np.zeros(3), *fallback)
     assert np.abs(analytic[0]).max() > 0

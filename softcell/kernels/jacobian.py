@@ -29,7 +29,7 @@ import math
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.config import JIT, JIT_COMPOSED
+from softcell.config import JIT
 from softcell.kernels.spectral import AXES
 
 #: Blocks nonzero at no more than this many points are transformed by direct sums, not FFTs.
@@ -37,17 +37,23 @@ SPARSE_POINTS = 48
 
 
 @njit(**JIT)
-def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
+def _transform(buf, index, count, twiddle, lo, hi, scratch, cursor, out):
     """out[m - lo] = N^-1 sum_n buf[n] e^{-i m xi_n} for m = lo..hi; ``index[:count]`` lists
-    the points where ``buf`` may be nonzero (all of them when count == N)."""
+    the points where ``buf`` may be nonzero (all of them when count == N). ``cursor``
+    (int64[>= count]) is scratch for the twiddle indices (m i) mod N, stepped without a
+    division per term."""
     n = buf.size
     if count <= SPARSE_POINTS:
         inv = 1.0 / n
+        for t in range(count):
+            cursor[t] = (lo * index[t]) % n
         for m in range(lo, hi + 1):
             s = 0.0 + 0.0j
             for t in range(count):
                 i = index[t]
-                s += buf[i] * twiddle[(m * i) % n]
+                s += buf[i] * twiddle[cursor[t]]
+                c = cursor[t] + i
+                cursor[t] = c - n if c >= n else c
             out[m - lo] = s * inv
     else:
         c2c(buf, scratch, AXES, True, 1.0 / n, 1)
@@ -109,8 +115,8 @@ def active_points(hww, hwp, active):
 # A compiled inner loop: exempt from the complexity limit of the rest of the code.
 @njit(**JIT)
 def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index, active,  # noqa: C901
-                      n_active, buf_a, buf_b, scratch, a_hat, b_hat, g_hat, cal_a, cal_b,
-                      factors, orders, jac):
+                      n_active, buf_a, buf_b, scratch, cursor, a_hat, b_hat, g_hat, cal_a,
+                      cal_b, factors, orders, jac):
     """Add to ``jac`` (float64[n_u, n_u], 1/s) the energy terms' part of the Jacobian, from
     their pointwise second derivatives at the N = len(hww) points of one grid, and reset
     ``hww, hwp, hpp`` to zero (they must be zero before the terms add into them).
@@ -157,8 +163,8 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
                 hyy = hww[i, 2 * al + 1, 2 * be + 1]
                 buf_a[i] = complex(0.5 * (hxx + hyy), 0.5 * (hyx - hxy))
                 buf_b[i] = complex(0.5 * (hxx - hyy), 0.5 * (hyx + hxy))
-            _transform(buf_a, index, count, twiddle, -2 * lc, 2 * lc, scratch, a_hat)
-            _transform(buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, b_hat)
+            _transform(buf_a, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, a_hat)
+            _transform(buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, b_hat)
             for i in range(m_count):
                 ca = factors[al, i]
                 cb = factors[be, i]
@@ -197,7 +203,7 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
             for t in range(count):
                 i = index[t]
                 buf_a[i] = complex(hwp[i, 2 * al, c], hwp[i, 2 * al + 1, c])
-            _transform(buf_a, index, count, twiddle, -lc, lc, scratch, g_hat)
+            _transform(buf_a, index, count, twiddle, -lc, lc, scratch, cursor, g_hat)
             for i in range(m_count):
                 v = factors[al, i] * g_hat[i]
                 jac[i, base + c] += mobility * v.real
@@ -215,108 +221,3 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
     for t in range(n_active):
         hww[active[t]] = 0.0
         hwp[active[t]] = 0.0
-
-
-def make_fd_hessian(partials):
-    """The documented fallback for energy terms without analytic second derivatives: central
-    differences of the (composed) partials kernel.
-
-    A term's partials at point n depend only on the point's own w_n and on the pose, so one
-    perturbation of component b at *all* points gives column b of every point's Hessian:
-    2 x (6 + 3) kernel calls in all. Steps: ``steps[0:6]`` for w (cm), ``steps[6:9]`` for the
-    pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
-    """
-
-    @njit(**JIT_COMPOSED)
-    def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus,
-                   pose_tmp, hww, hwp, hpp):
-        n = w.shape[1]
-        for b in range(6):
-            h = steps[b]
-            saved[:] = w[b]
-            for i in range(n):
-                w[b, i] = saved[i] + h
-            plus[:, :] = 0.0
-            dplus[:] = 0.0
-            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
-                     plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
-            for i in range(n):
-                w[b, i] = saved[i] - h
-            minus[:, :] = 0.0
-            dminus[:] = 0.0
-            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
-                     minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
-            w[b] = saved
-            inv = 0.5 / h
-            for a in range(6):
-                for i in range(n):
-                    hww[i, a, b] += (plus[a, i] - minus[a, i]) * inv
-        for c in range(3):
-            h = steps[6 + c]
-            pose_tmp[:] = pose
-            pose_tmp[c] = pose[c] + h
-            plus[:, :] = 0.0
-            dplus[:] = 0.0
-            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
-                     plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
-            pose_tmp[c] = pose[c] - h
-            minus[:, :] = 0.0
-            dminus[:] = 0.0
-            partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
-                     minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
-            inv = 0.5 / h
-            for a in range(6):
-                for i in range(n):
-                    hwp[i, a, c] += (plus[a, i] - minus[a, i]) * inv
-            for d in range(3):
-                hpp[d, c] += (dplus[d] - dminus[d]) * inv
-
-    return fd_hessian
-
-
-HESSIAN_ARGS = ("w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
-                "pose_tmp, hww, hwp, hpp")
-
-
-def compose_hessians(terms) -> object:
-    """One compiled function that adds every term's second derivatives into ``hww, hwp, hpp``
-    (which :func:`assemble_jacobian` leaves at zero after use): its ``hessian_kernel`` where
-    it has one, the central-difference fallback of :func:`make_fd_hessian` otherwise.
-    ``coefficients`` is the tuple of the terms' arrays; ``w`` is float64[6, N]
-    (x, y, x', y', x'', y''); the other arguments are those of the fallback.
-    """
-    namespace: dict[str, object] = {}
-    lines = [f"def total_hessian({HESSIAN_ARGS}):"]
-    for i, term in enumerate(terms):
-        kernel = term.hessian_kernel()
-        if kernel is not None:
-            namespace[f"h{i}"] = kernel
-            lines.append(f"    h{i}(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, "
-                         f"coefficients[{i}], hww, hwp, hpp)")
-        else:
-            namespace[f"h{i}"] = make_fd_hessian(term.partials_kernel())
-            args = HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
-            lines.append(f"    h{i}({args})")
-    if len(lines) == 1:
-        lines.append("    pass")
-    exec(compile("\n".join(lines) + "\n", "<softcell composed hessians>", "exec"), namespace)
-    return njit(**JIT_COMPOSED)(namespace["total_hessian"])
-
-
-def make_fd_drive_jacobian(drive):
-    """d drive / d pose by central differences of the drive kernel (steps in cm, cm, rad)."""
-
-    @njit(**JIT_COMPOSED)
-    def drive_jacobian(phase, datum, pose, context, drive_coefficients, steps, pose_tmp,
-                       plus, minus, out):
-        for d in range(3):
-            h = steps[6 + d]
-            pose_tmp[:] = pose
-            pose_tmp[d] = pose[d] + h
-            drive(phase, datum, pose_tmp, context, drive_coefficients, plus)
-            pose_tmp[d] = pose[d] - h
-            drive(phase, datum, pose_tmp, context, drive_coefficients, minus)
-            for c in range(3):
-                out[c, d] = (plus[c] - minus[c]) * (0.5 / h)
-
-    return drive_jacobian

@@ -56,7 +56,7 @@ def factor_iteration_matrix(jac, h, gamma, mat, pivots):
     return lu_factor(mat, pivots)
 
 
-@njit(**JIT_COMPOSED)
+@njit(**JIT_COMPOSED, inline="always")
 def stages(f, args, u, f0, h, a, c, mat, pivots, k, y, force):
     """The increments k[s] of every stage, with ``mat`` factored by
     :func:`factor_iteration_matrix`; ``f0`` is f(u). On return ``y`` holds the last stage's

@@ -10,82 +10,15 @@ F_int = -(2 pi / N) sum_n de_n/dr_bot (SI:EQ:int_bot). Time is counted in whole 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
-from softcell.config import JIT_COMPOSED
 from softcell.core.engine import Model, Stepper, explicit_decay_rate
+from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.compose import template
 from softcell.core.params import MODEL_PARAMETERS
 from softcell.core.plugin.contracts import Integrator, Schedule
 from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ParameterError
-from softcell.kernels.spectral import assemble, evaluate
-
-_STEPPERS: dict[tuple[int, int], object] = {}
-
-
-def _make_segment(partials, drive):
-    @njit(**JIT_COMPOSED)
-    def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
-                coefficients, context, drive_coefficients, mobility, bot_mobility,
-                n_nodes, membrane):
-        n = n_nodes
-        spec = np.empty(n, dtype=np.complex128)
-        z = np.empty(n, dtype=np.complex128)
-        zp = np.empty(n, dtype=np.complex128)
-        zpp = np.empty(n, dtype=np.complex128)
-        q0 = np.empty(n, dtype=np.complex128)
-        q1 = np.empty(n, dtype=np.complex128)
-        q2 = np.empty(n, dtype=np.complex128)
-        x = np.empty(n)
-        y = np.empty(n)
-        xp = np.empty(n)
-        yp = np.empty(n)
-        xpp = np.empty(n)
-        ypp = np.empty(n)
-        parts = np.empty((6, n))
-        fhat = np.zeros(modes.size, dtype=np.complex128)
-        dpose = np.zeros(3)
-        drive_out = np.zeros(3)
-        weight = 2.0 * math.pi / n
-        p = phase_index
-        for _ in range(n_steps):
-            t = step * dt
-            while p + 1 < starts.size and starts[p + 1] <= t:
-                p += 1
-            dpose[:] = 0.0
-            if membrane:
-                evaluate(modes, spec, z, zp, zpp)
-                for i in range(n):
-                    x[i] = z[i].real
-                    y[i] = z[i].imag
-                    xp[i] = zp[i].real
-                    yp[i] = zp[i].imag
-                    xpp[i] = zpp[i].real
-                    ypp[i] = zpp[i].imag
-                parts[:, :] = 0.0
-                partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                         parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], dpose)
-                has_q0 = False
-                for i in range(n):
-                    q0[i] = parts[0, i] + 1j * parts[1, i]
-                    q1[i] = parts[2, i] + 1j * parts[3, i]
-                    q2[i] = parts[4, i] + 1j * parts[5, i]
-                    if parts[0, i] != 0.0 or parts[1, i] != 0.0:
-                        has_q0 = True
-                assemble(q0, q1, q2, has_q0, spec, fhat)
-            drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)
-            for j in range(3):
-                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j])
-            if membrane:
-                for j in range(modes.size):
-                    modes[j] += dt * mobility * fhat[j]
-            step += 1
-        return step, p
-
-    return segment
 
 
 class ExplicitEulerStepper(Stepper):
@@ -97,10 +30,11 @@ class ExplicitEulerStepper(Stepper):
     """
 
     def __init__(self, model: Model, dt: float) -> None:
-        key = (id(model.partials), id(model.drive))
-        if key not in _STEPPERS:
-            _STEPPERS[key] = _make_segment(model.partials, model.drive)
-        self.segment = _STEPPERS[key]
+        self.segment = compile_module(
+            "explicit-euler", template(__package__ + ".templates", "explicit_euler.py"),
+            {"partials": model.partials, "drive": model.drive},
+            f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}",
+        ).segment
         self.model, self.dt = model, dt
 
     def start(self, modes, pose, schedule):

@@ -17,30 +17,23 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
-from rocket_fft import c2c
 
-from softcell.config import JIT_COMPOSED
-from softcell.core.engine import Model, SimulationError, Stepper, compose_partials
+from softcell.config import JIT
+from softcell.core.engine import (
+    Model,
+    SimulationError,
+    Stepper,
+    compose_hessians,
+    compose_partials,
+    fd_drive_jacobian,
+)
+from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.compose import template
 from softcell.core.params import ParameterSpec
 from softcell.core.plugin.contracts import Integrator, Schedule
 from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ParameterError
-from softcell.kernels.jacobian import (
-    SPARSE_POINTS,
-    active_points,
-    assemble_jacobian,
-    compose_hessians,
-    make_fd_drive_jacobian,
-)
-from softcell.kernels.rosenbrock import (
-    Tableau,
-    dense_output,
-    dense_value,
-    error_norm,
-    factor_iteration_matrix,
-    stages,
-)
-from softcell.kernels.spectral import AXES, assemble, derivative_spectrum
+from softcell.kernels.rosenbrock import Tableau
 
 # RODAS4 in Hairer & Wanner's transformed variables: gamma, a_ij, c_ij, dense output h_ij.
 GAMMA = 0.25
@@ -83,7 +76,8 @@ STEPS, REJECTED, RHS_CALLS, JACOBIANS = range(4)
 
 Grid = namedtuple("Grid", [
     "spec", "curve", "w", "parts", "q", "fhat", "dpose", "saved", "plus", "minus", "hww",
-    "hwp", "hpp", "twiddle", "index", "active", "n_active", "buf_a", "buf_b", "scratch"])
+    "hwp", "hpp", "twiddle", "index", "active", "n_active", "buf_a", "buf_b", "scratch",
+    "cursor"])
 
 Workspace = namedtuple("Workspace", [
     "modes", "smooth", "fine", "drv", "steps", "dplus", "dminus", "pose_tmp", "djac",
@@ -101,7 +95,7 @@ def grid(n: int, m: int) -> Grid:
                 hpp=np.zeros((3, 3)), twiddle=np.exp(-2j * np.pi * np.arange(n) / n),
                 index=np.zeros(n, np.int64), active=np.zeros(n, np.int64),
                 n_active=np.zeros(1, np.int64), buf_a=np.zeros(n, c), buf_b=np.zeros(n, c),
-                scratch=np.zeros(n, c))
+                scratch=np.zeros(n, c), cursor=np.zeros(n, np.int64))
 
 
 def workspace(model: Model, smooth_nodes: int) -> Workspace:
@@ -123,8 +117,8 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         drag=np.zeros(3))
 
 
-@njit(**JIT_COMPOSED)
-def _accumulate(g, mobility, out, drag):
+@njit(**JIT)
+def accumulate(g, mobility, out, drag):
     """Add one grid's force modes to the modes' rates in ``out`` and its (2 pi / N)-weighted
     pose derivatives to ``drag``."""
     m = g.fhat.size
@@ -136,248 +130,6 @@ def _accumulate(g, mobility, out, drag):
         drag[c] += weight * g.dpose[c]
 
 
-def _make_grid_functions(partials, hessian, scan):
-    """Force modes and Jacobian contributions of one group of terms on one grid.
-
-    With ``scan`` False, second derivatives are taken to vanish where all partials do (true
-    of the contact, which vanishes beyond its cut-off) and only those points are visited;
-    otherwise (the fallback's differences, or a small grid) every point is scanned.
-    """
-
-    @njit(**JIT_COMPOSED)
-    def forces(modes, pose, order, context, coefficients, g):
-        """g.fhat (N) and g.dpose of the group at these modes; curve derivatives above
-        ``order`` are left at zero."""
-        n = g.w.shape[1]
-        lc = (modes.size - 1) // 2
-        for o in range(order + 1):
-            derivative_spectrum(modes, o, g.spec)
-            c2c(g.spec, g.curve[o], AXES, False, 1.0, 1)
-            for i in range(n):
-                g.w[2 * o, i] = g.curve[o, i].real
-                g.w[2 * o + 1, i] = g.curve[o, i].imag
-        g.parts[:, :] = 0.0
-        g.dpose[:] = 0.0
-        p = g.parts
-        partials(g.w[0], g.w[1], g.w[2], g.w[3], g.w[4], g.w[5], pose, context, coefficients,
-                 p[0], p[1], p[2], p[3], p[4], p[5], g.dpose)
-        count = 0
-        n_active = 0
-        higher = False
-        for i in range(n):
-            zero = True
-            if p[0, i] != 0.0 or p[1, i] != 0.0:
-                g.index[count] = i
-                count += 1
-                zero = False
-            if p[2, i] != 0.0 or p[3, i] != 0.0 or p[4, i] != 0.0 or p[5, i] != 0.0:
-                higher = True
-                zero = False
-            if not zero:
-                g.active[n_active] = i
-                n_active += 1
-        g.n_active[0] = n_active
-        if higher or count > SPARSE_POINTS:
-            for i in range(n):
-                for o in range(3):
-                    g.q[o, i] = complex(p[2 * o, i], p[2 * o + 1, i])
-            assemble(g.q[0], g.q[1], g.q[2], count > 0, g.spec, g.fhat)
-        else:
-            # Only a few points carry a force (the contact): direct sums, no FFT.
-            inv = 1.0 / n
-            for j in range(modes.size):
-                k = j - lc
-                acc = 0.0 + 0.0j
-                for t in range(count):
-                    i = g.index[t]
-                    acc += complex(p[0, i], p[1, i]) * g.twiddle[(k * i) % n]
-                g.fhat[j] = -acc * inv
-
-    @njit(**JIT_COMPOSED)
-    def jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
-        """Add the group's part of the Jacobian into ws.jac; g.w must hold the curve and
-        g.active the points where the last :func:`forces` at this state found partials."""
-        hessian(g.w, pose, context, coefficients, ws.steps, g.saved, g.plus, g.minus,
-                ws.dplus, ws.dminus, ws.pose_tmp, g.hww, g.hwp, g.hpp)
-        if scan:
-            n_active = active_points(g.hww, g.hwp, g.active)
-        else:
-            n_active = g.n_active[0]
-        assemble_jacobian(g.hww, g.hwp, g.hpp, (ws.modes.size - 1) // 2, mobility,
-                          bot_mobility, g.twiddle, g.index, g.active, n_active, g.buf_a,
-                          g.buf_b, g.scratch,
-                          ws.a_hat, ws.b_hat, ws.g_hat, ws.cal_a, ws.cal_b, ws.factors,
-                          ws.orders, ws.jac)
-
-    return forces, jacobian
-
-
-def _make_rhs(smooth_group, fine_group, drive):
-    """The compiled right-hand side and its Jacobian. Each group is (partials, hessian,
-    present, order, scan) for the smooth terms (coarse grid) and the others (N points)."""
-    forces_s, jacobian_s = _make_grid_functions(smooth_group[0], smooth_group[1], True)
-    forces_f, jacobian_f = _make_grid_functions(fine_group[0], fine_group[1], fine_group[4])
-    has_s, order_s = smooth_group[2], smooth_group[3]
-    has_f, order_f = fine_group[2], fine_group[3]
-    fd_drive = make_fd_drive_jacobian(drive)
-
-    @njit(**JIT_COMPOSED)
-    def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobility,
-            bot_mobility, membrane, ws):
-        """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``.
-        ``coefficients``: (smooth group's, other group's)."""
-        m = ws.modes.size
-        pose = u[2 * m:]
-        drag = ws.drag
-        drag[:] = 0.0
-        if membrane:
-            for j in range(m):
-                ws.modes[j] = complex(u[j], u[m + j])
-            for j in range(m):
-                out[j] = 0.0
-                out[m + j] = 0.0
-            if has_s:
-                forces_s(ws.modes, pose, order_s, context, coefficients[0], ws.smooth)
-                _accumulate(ws.smooth, mobility, out, drag)
-            if has_f:
-                forces_f(ws.modes, pose, order_f, context, coefficients[1], ws.fine)
-                _accumulate(ws.fine, mobility, out, drag)
-        else:
-            out[:2 * m] = 0.0
-        drive(phase, datum, pose, context, drive_coefficients, ws.drv)
-        for c in range(3):
-            out[2 * m + c] = bot_mobility[c] * (ws.drv[c] - drag[c])
-
-    @njit(**JIT_COMPOSED)
-    def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
-                 bot_mobility, membrane, ws):
-        """The Jacobian at u into ``ws.jac``; the grids' ``w`` must hold the curves at u."""
-        m = ws.modes.size
-        pose = u[2 * m:]
-        ws.jac[:, :] = 0.0
-        if membrane:
-            if has_s:
-                jacobian_s(pose, context, coefficients[0], mobility, bot_mobility, ws.smooth,
-                           ws)
-            if has_f:
-                jacobian_f(pose, context, coefficients[1], mobility, bot_mobility, ws.fine, ws)
-        fd_drive(phase, datum, pose, context, drive_coefficients, ws.steps, ws.pose_tmp,
-                 ws.drv_plus, ws.drv_minus, ws.djac)
-        for c in range(3):
-            for d in range(3):
-                ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
-
-    return rhs, jacobian
-
-
-def _make_loop(rhs, jacobian):  # noqa: C901 (its complexity is the compiled advance_to)
-    """The compiled time loop around :func:`_make_rhs`'s right-hand side and Jacobian: steps
-    of the generic Rosenbrock method with RODAS4's tableau, step-size control, landing on
-    the protocol's switches, and samples from the continuous extension."""
-
-    @njit(**JIT_COMPOSED)
-    def stage_rhs(y, out, args):
-        """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
-        phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, \
-            membrane, ws = args
-        rhs(y, phase, datum, out, coefficients, context, drive_coefficients, mobility,
-            bot_mobility, membrane, ws)
-
-    @njit(**JIT_COMPOSED)
-    def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, phases, data,
-                   coefficients, context, drive_coefficients, mobility, bot_mobility,
-                   membrane, atol, rtol, max_step, a, cc, hd, ws):
-        t = clock[T]
-        p = phase_index[0]
-        k = ws.k
-        y = ws.y
-        ynew = ws.ynew
-        force = ws.force
-        mat = ws.mat
-        eps = 1e-12 * (1.0 + abs(t_end))
-        while t < t_end - eps:
-            t_switch = starts[p + 1] if p + 1 < starts.size else np.inf
-            phase, datum = phases[p], data[p]
-            rhs(u, phase, datum, ws.f0, coefficients, context, drive_coefficients, mobility,
-                bot_mobility, membrane, ws)
-            jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
-                     bot_mobility, membrane, ws)
-            counters[RHS_CALLS] += 1
-            counters[JACOBIANS] += 1
-            while True:
-                h = min(clock[H_NEXT], max_step)
-                land = False
-                if t_switch - t <= 1.05 * h:
-                    h = t_switch - t
-                    land = True
-                if h <= 1e-14 * (1.0 + abs(t)):
-                    return STEP_UNDERFLOW
-                if not factor_iteration_matrix(ws.jac, h, GAMMA, mat, ws.pivots):
-                    return SINGULAR
-                stages(stage_rhs, (phase, datum, coefficients, context, drive_coefficients,
-                                   mobility, bot_mobility, membrane, ws),
-                       u, ws.f0, h, a, cc, mat, ws.pivots, k, y, force)
-                counters[RHS_CALLS] += cc.shape[0] - 1
-                err = error_norm(u, y, k, atol, rtol, ynew)
-                if not math.isfinite(err):
-                    err = 1e10
-                fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err ** 0.25 / SAFETY))
-                if err <= 1.0:
-                    if counters[STEPS] > 0:
-                        gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
-                        gus = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, gus / SAFETY))
-                        fac = max(fac, gus)
-                    h_new = h / fac
-                    if clock[REJECTED_LAST] > 0.0:
-                        h_new = min(h_new, h)
-                    clock[H_ACCEPTED] = h
-                    clock[ERR_ACCEPTED] = max(1e-2, err)
-                    clock[REJECTED_LAST] = 0.0
-                    dense_output(u, ynew, k, hd, dense)
-                    u[:] = ynew
-                    clock[T_LAST] = t
-                    clock[H_LAST] = h
-                    if land:
-                        t = t_switch
-                        p += 1
-                    else:
-                        t = t + h
-                    clock[T] = t
-                    clock[H_NEXT] = h_new
-                    counters[STEPS] += 1
-                    break
-                clock[H_NEXT] = h / fac
-                clock[REJECTED_LAST] = 1.0
-                counters[REJECTED] += 1
-        phase_index[0] = p
-        if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
-            sample[:] = u
-        else:
-            dense_value(dense, (t_end - clock[T_LAST]) / clock[H_LAST], sample)
-        return OK
-
-    @njit(**JIT_COMPOSED)
-    def integrate(u, clock, phase_index, counters, dense, targets, samples, starts, phases,
-                  data, coefficients, context, drive_coefficients, mobility, bot_mobility,
-                  membrane, atol, rtol, max_step, a, cc, hd, ws):
-        """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
-        write the state there into the matching row of ``samples`` from the last step's
-        continuous extension. Returns a status code."""
-        for r in range(targets.size):
-            status = advance_to(u, clock, phase_index, counters, dense, targets[r],
-                                samples[r], starts, phases, data, coefficients, context,
-                                drive_coefficients, mobility, bot_mobility, membrane, atol,
-                                rtol, max_step, a, cc, hd, ws)
-            if status != OK:
-                return status
-        return OK
-
-    return integrate
-
-
-_LOOPS: dict[tuple, tuple] = {}
-
-
 def groups(model: Model) -> tuple[list, list]:
     """The model's terms split into those evaluated on the coarse grid (``smooth``) and the
     others, each as a list of (index, term)."""
@@ -386,25 +138,36 @@ def groups(model: Model) -> tuple[list, list]:
     return smooth, other
 
 
+def _names(terms) -> str:
+    return " + ".join(t.name for t in terms) or "none"
+
+
 def compiled_loop(model: Model) -> tuple:
-    """(rhs, jacobian, integrate) compiled for the model's terms and drive (cached)."""
-    parts = []
-    key: list[object] = [id(model.drive)]
-    for group in groups(model):
+    """(rhs, jacobian, integrate) compiled for the model's terms and drive: generated modules
+    from ``templates/rodas4_grid.py`` (once per group of terms) and
+    ``templates/rodas4_loop.py``, cached on disk (:mod:`softcell.core.engine.compiled`)."""
+    grid_source = template(__package__ + ".templates", "rodas4_grid.py")
+    bindings: dict[str, object] = {}
+    for suffix, group in zip("sf", groups(model), strict=True):
         terms = [t for _, t in group]
-        kernels = [t.partials_kernel() for t in terms]
-        hessians = [t.hessian_kernel() for t in terms]
-        order = max([t.derivative_order for t in terms], default=0)
-        key.append((tuple(id(k) for k in kernels), tuple(id(h) for h in hessians), order))
-        parts.append((kernels, terms, order))
-    key_t = tuple(key)
-    if key_t not in _LOOPS:
-        built = [(compose_partials(kernels), compose_hessians(terms), bool(terms), order,
-                  any(t.hessian_kernel() is None for t in terms))
-                 for kernels, terms, order in parts]
-        rhs, jacobian = _make_rhs(built[0], built[1], model.drive)
-        _LOOPS[key_t] = (rhs, jacobian, _make_loop(rhs, jacobian))
-    return _LOOPS[key_t]
+        grid_module = compile_module("rodas4-grid", grid_source, {
+            "partials": compose_partials([t.partials_kernel() for t in terms]),
+            "hessian": compose_hessians(terms),
+            # the coarse grid is always scanned; the others are unless every term has an
+            # analytic Hessian
+            "SCAN": suffix == "s" or any(t.hessian_kernel() is None for t in terms),
+        }, _names(terms))
+        bindings[f"forces_{suffix}"] = grid_module.forces
+        bindings[f"jacobian_{suffix}"] = grid_module.grid_jacobian
+        bindings[f"HAS_{suffix.upper()}"] = bool(terms)
+        bindings[f"ORDER_{suffix.upper()}"] = max([t.derivative_order for t in terms],
+                                                  default=0)
+    bindings["drive"] = model.drive
+    bindings["drive_jacobian"] = fd_drive_jacobian(model.drive)
+    loop = compile_module("rodas4-loop", template(__package__ + ".templates",
+                                                  "rodas4_loop.py"), bindings,
+                          f"{_names(model.terms)}; {model.protocol.name}")
+    return loop.rhs, loop.jacobian, loop.integrate
 
 
 def group_coefficients(model: Model) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:

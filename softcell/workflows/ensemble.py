@@ -410,7 +410,9 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
     out.mkdir(parents=True, exist_ok=True)
     todo = resume.todo
     total = sum(_duration(t) for t in todo)
+    # smoothing=0: the ETA from the average rate since the start, not the last few updates
     with tqdm(total=total, unit="sim s", disable=not progress or not todo, unit_scale=False,
+              smoothing=0,
               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} sim s "
                          "[{elapsed}<{remaining}]",
               desc=f"{len(todo)} realizations") as bar:

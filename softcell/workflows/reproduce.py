@@ -12,6 +12,7 @@ directory::
     report.md, report.html  what ran, every figure, the paper's findings beside ours
     findings.json           the findings table, for scripts
     reproduce.json          the design, seed and version the directory was made for
+    timing.json             wall time per step and peak memory of the last invocation
 
 Run again into the same directory with the same design, seed and version (``reproduce.json``
 records them), it keeps every finished realization (as ``softcell simulate`` does), so an
@@ -264,8 +265,37 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     with step("report", "writing the report"):
         write_report(out, design=design, seed=seed, steps=outcome.steps, notes=outcome.notes,
                      figures=figures, video=video)
+    _write_timing(out, outcome, workers if scheduler is None else None)
     say(f"report: {outcome.report} and {outcome.report.with_suffix('.html')}")
     return outcome
+
+
+#: What :func:`reproduce` measured of its own run: wall time per step and peak memory.
+TIMING = "timing.json"
+
+
+def _write_timing(out: Path, outcome: Outcome, workers: int | None) -> None:
+    """``timing.json``: this invocation's wall seconds per step and in all, and the peak
+    resident memory of this process and of its largest worker process (MiB)."""
+    import datetime
+    import resource
+
+    from softcell._version import __version__
+    from softcell.io.files import atomic_write
+
+    mib = 1024.0  # ru_maxrss is in KiB on Linux
+    timing = {
+        "version": __version__, "date": datetime.date.today().isoformat(),
+        "cores": workers, "design": outcome.design.name,
+        "steps": {k: round(v, 1) for k, v in outcome.steps.items()},
+        "total": round(sum(outcome.steps.values()), 1),
+        "peak_rss_mib": {
+            "this_process": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / mib),
+            "largest_worker": round(
+                resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / mib)},
+    }
+    with atomic_write(out / TIMING) as tmp:
+        tmp.write_text(json.dumps(timing, indent=1) + "\n", encoding="utf-8")
 
 
 class _Timer:

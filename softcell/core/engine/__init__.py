@@ -1,13 +1,15 @@
 """The engine: the compiled model of a parameter point, the state of a realization, and the
 model evaluated with numpy for checks."""
 
-from softcell.core.engine.model import (
+from softcell.core.engine.compose import (
+    HESSIAN_ARGS,
     PARTIALS_ARGS,
-    Model,
-    build_integrator,
-    build_model,
+    compose_hessians,
     compose_partials,
+    fd_drive_jacobian,
+    fd_hessian,
 )
+from softcell.core.engine.model import Model, build_integrator, build_model
 from softcell.core.engine.reference import (
     explicit_decay_rate,
     force_modes,
@@ -27,7 +29,8 @@ from softcell.core.engine.state import (
 from softcell.core.plugin.contracts import Stepper
 from softcell.errors import SimulationError
 
-__all__ = ["PARTIALS_ARGS", "Model", "Record", "SimulationError", "Stepper", "build_integrator",
-           "build_model", "check_state", "circle_modes", "compose_partials",
-           "equilibrium_radius", "explicit_decay_rate", "force_modes", "initial_state",
+__all__ = ["HESSIAN_ARGS", "PARTIALS_ARGS", "Model", "Record", "SimulationError", "Stepper",
+           "build_integrator", "build_model", "check_state", "circle_modes",
+           "compose_hessians", "compose_partials", "equilibrium_radius", "explicit_decay_rate",
+           "fd_drive_jacobian", "fd_hessian", "force_modes", "initial_state",
            "membrane_jacobian", "membrane_length", "phase_at", "sample_times", "total_energy"]

@@ -12,28 +12,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
-from softcell.config import JIT_COMPOSED
+from softcell.core.engine.compose import compose_partials
 from softcell.core.params import Parameters
 from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Integrator, check_kernels
 from softcell.core.plugin.registry import get_registry
 
-PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
-                 "p0x, p0y, p1x, p1y, p2x, p2y, dpose")
-
-def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., None]:
-    """One compiled function that calls every term's partials kernel in turn.
-
-    Its signature is that of a term kernel, except that ``coefficients`` is a tuple holding
-    one coefficient array per term.
-    """
-    calls = [f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
-             for i in range(len(kernels))] or ["    pass"]
-    source = f"def total_partials({PARTIALS_ARGS}):\n" + "\n".join(calls) + "\n"
-    namespace: dict[str, object] = {f"k{i}": k for i, k in enumerate(kernels)}
-    exec(compile(source, "<softcell composed partials>", "exec"), namespace)
-    return njit(**JIT_COMPOSED)(namespace["total_partials"])
 
 @dataclass
 class Model:
@@ -81,8 +65,6 @@ class Model:
     def couples_bot(self) -> bool:
         return any(t.couples_bot for t in self.terms)
 
-_PARTIALS_CACHE: dict[tuple[int, ...], Callable[..., None]] = {}
-
 def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
                 membrane: bool = True) -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
@@ -109,15 +91,12 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
     for component in (*terms, drive):
         check_kernels(component, registry.origin(component.kind, component.name))
     kernels = [t.partials_kernel() for t in terms]
-    key = tuple(id(k) for k in kernels)
-    if key not in _PARTIALS_CACHE:
-        _PARTIALS_CACHE[key] = compose_partials(kernels)
     coefficients = tuple(np.ascontiguousarray(t.coefficients()) for t in terms)
     if not coefficients:
         coefficients = (np.zeros(1),)
     l0 = params.membrane_length
     return Model(
-        params=params, terms=terms, protocol=drive, partials=_PARTIALS_CACHE[key],
+        params=params, terms=terms, protocol=drive, partials=compose_partials(kernels),
         coefficients=coefficients, drive=drive.drive_kernel(),
         drive_coefficients=np.ascontiguousarray(drive.coefficients()),
         context=np.array([l0, float(params.bot_semi_major), float(params.bot_semi_minor)]),

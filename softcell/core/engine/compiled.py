@@ -1,0 +1,395 @@
+"""The on-disk cache of composed models: generated modules that numba caches like any other.
+
+numba caches a compiled function by its source file, but the functions an integrator composes
+from the chosen components (the sum of the energy terms, the right-hand side, the time loop)
+used to be closures, which it cannot cache: every new process compiled them again. Here each
+composition is written out as a real module, one directory per *entry*::
+
+    <cache>/<label>-<key>/model.py        the generated source
+    <cache>/<label>-<key>/entry.json      what it is for (label, components, versions)
+    <cache>/<label>-<key>/__pycache__/    numba's own cache files of its functions
+
+The functions it calls (the components' kernels, constants, other entries' functions) are
+*bound* into the module's namespace before it runs. numba does not look at those bindings
+when it replays a cached function, so the key covers them: the source, each bound kernel's
+code (every Python file of its package), its distribution's version, and the versions of
+softcell, numba, numpy and Python. A changed plugin gives a new key, hence a new entry; a
+stale entry is never read. Writers write to a temporary name and rename, so processes starting
+at once (dask workers) see either no file or a whole one; a corrupt entry (a truncated file,
+say) is removed and rebuilt with a :class:`~softcell.errors.CacheWarning`.
+
+Location: ``$SOFTCELL_CACHE_DIR``, else the user cache directory (``platformdirs``), under
+``compiled/``.
+"""
+
+from __future__ import annotations
+
+import ast
+import datetime
+import functools
+import hashlib
+import importlib
+import importlib.metadata
+import io
+import json
+import os
+import pickletools
+import platform
+import shutil
+import sys
+import tempfile
+import threading
+import types
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+from numba.core.registry import CPUDispatcher
+
+from softcell._version import __version__
+from softcell.config import JIT
+from softcell.errors import CacheWarning
+
+#: Environment variable naming the cache's root directory.
+CACHE_ENV = "SOFTCELL_CACHE_DIR"
+
+#: Name of the generated source in each entry.
+SOURCE = "model.py"
+
+_HEADER = "# softcell compiled model; sha256 of the lines below: "
+
+# numba flags of the generated functions: the kernels' own, cached on disk, or not cached
+# where an entry cannot be keyed (see :class:`NotCacheable`).
+_CACHED = {**JIT, "cache": True}
+_UNCACHED = {**JIT, "cache": False}
+
+#: The package the generated modules are registered under in ``sys.modules``.
+_PARENT = "softcell_compiled"
+
+_LOCK = threading.Lock()
+_LOADED: dict[str, types.ModuleType] = {}  # by entry folder
+_KEYS: dict[int, str] = {}  # id of a generated function -> key of its entry
+
+
+def cache_dir() -> Path:
+    """The root of the compiled-model cache (created on first use)."""
+    env = os.environ.get(CACHE_ENV)
+    if env:
+        return Path(env).expanduser()
+    import platformdirs
+
+    return platformdirs.user_cache_path("softcell") / "compiled"
+
+
+class NotCacheable(Exception):
+    """A binding whose code cannot be identified, so an entry holding it cannot be keyed."""
+
+
+#: The parts of softcell that compiled code is made of (kernels, the built-in components,
+#: templates, numba flags); a change elsewhere (the CLI, the analysis) keeps the cache.
+COMPILED_PARTS = ("config.py", "kernels", "plugins", "core/engine")
+
+
+def _source_files(top: str) -> list[Path]:
+    """The Python files of the top-level package (or module) ``top``; for softcell, those of
+    its :data:`COMPILED_PARTS`."""
+    module = sys.modules.get(top)
+    paths = list(getattr(module, "__path__", []) or [])
+    if not paths:
+        file = getattr(module, "__file__", None)
+        if not file or not os.path.exists(file):
+            raise NotCacheable(f"module {top!r} has no source file")
+        return [Path(file)]
+    files: list[Path] = []
+    for root in paths:
+        if top == "softcell":
+            for part in COMPILED_PARTS:
+                path = Path(root, part)
+                files += [path] if path.suffix == ".py" else sorted(path.rglob("*.py"))
+        else:
+            files += sorted(Path(root).rglob("*.py"))
+    return files
+
+
+def _package_hash(top: str) -> str:
+    """sha256 of :func:`_source_files` of ``top``, names and contents (re-read whenever a
+    file's size or time changes, so a plugin edited and reloaded in a session gets a new
+    key)."""
+    files = _source_files(top)
+    stamps = tuple((str(f), f.stat().st_mtime_ns, f.stat().st_size) for f in files)
+    return _hash_files(stamps)
+
+
+@functools.lru_cache(maxsize=256)
+def _hash_files(stamps: tuple[tuple[str, int, int], ...]) -> str:
+    digest = hashlib.sha256()
+    for name, _, _ in stamps:
+        digest.update(os.path.basename(name).encode())
+        digest.update(Path(name).read_bytes())
+    return digest.hexdigest()
+
+
+@functools.cache
+def _distribution_version(top: str) -> str:
+    """The version of ``top``: its distribution's of the same name, else its ``__version__``
+    (the code itself is keyed by :func:`_package_hash`)."""
+    try:
+        return importlib.metadata.version(top)
+    except importlib.metadata.PackageNotFoundError:
+        return str(getattr(sys.modules.get(top), "__version__", ""))
+
+
+def _fingerprint(name: str, value: object) -> str:
+    """What identifies a binding's behaviour, as text for the key."""
+    if value is None or isinstance(value, bool | int | float | str):
+        return f"{name}={value!r}"
+    if isinstance(value, CPUDispatcher):
+        key = _KEYS.get(id(value))
+        if key is not None:
+            return f"{name}=entry:{key}"
+        func = value.py_func
+        qualname = func.__qualname__
+        if "<locals>" in qualname or "<lambda>" in qualname:
+            raise NotCacheable(f"{func.__module__}.{qualname} is a closure: its behaviour "
+                               "depends on values the cache cannot see")
+        top = func.__module__.split(".")[0]
+        if sys.modules.get(func.__module__) is None or top == "__main__":
+            raise NotCacheable(f"{func.__module__}.{qualname} is not defined in an "
+                               "importable module")
+        return (f"{name}={func.__module__}:{qualname}:{_package_hash(top)}:"
+                f"{_distribution_version(top)}")
+    raise TypeError(f"cannot bind {name!r} = {value!r} into a compiled module: only "
+                    "compiled functions and scalars can be bound")
+
+
+#: Imports of generated sources that the environment's versions already cover.
+_KEYED_BY_VERSION = {"softcell", "numba", "numpy", "rocket_fft", "llvmlite"}
+
+
+def _imported_packages(source: str) -> list[str]:
+    """The top-level packages ``source`` imports whose code the key must cover (a plugin's
+    own helpers, say): every one but the standard library's and those of the environment."""
+    tops = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            tops.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            tops.add(node.module.split(".")[0])
+    tops -= _KEYED_BY_VERSION | set(sys.stdlib_module_names)
+    for top in tops:
+        importlib.import_module(top)
+    return sorted(tops)
+
+
+def _environment() -> str:
+    return (f"softcell={__version__}:{_package_hash('softcell')};numba={numba.__version__};"
+            f"numpy={np.__version__};python={sys.version};{platform.machine()}")
+
+
+def environment_key() -> str:
+    """sha256 of what every entry's key shares: softcell's code and the versions of softcell,
+    numba, numpy and Python. An entry made under another is stale: never read again."""
+    return hashlib.sha256(_environment().encode()).hexdigest()
+
+
+def entry_key(source: str, bindings: Mapping[str, object]) -> str:
+    """The key of the entry holding ``source`` with ``bindings`` (hex sha256).
+
+    Raises
+    ------
+    NotCacheable
+        When a bound function's code cannot be identified (a closure, a notebook cell).
+    """
+    parts = [_environment(), source]
+    parts += [_fingerprint(n, bindings[n]) for n in sorted(bindings)]
+    parts += [f"import {top}:{_package_hash(top)}:{_distribution_version(top)}"
+              for top in _imported_packages(source)]
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One entry of the cache, as listed by ``softcell cache``."""
+
+    path: Path
+    label: str
+    description: str
+    created: str
+    size: int  # bytes, numba's files included
+    stale: bool  # made by another softcell build or numba, numpy, Python version
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _checked_source(path: Path) -> str | None:
+    """The body of a generated module whose header matches it, else None."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    first, _, body = text.partition("\n")
+    if first != _HEADER + hashlib.sha256(body.encode()).hexdigest():
+        return None
+    return body
+
+
+def _pickle_complete(data: bytes) -> None:
+    """Raise ValueError unless ``data`` is one or more whole pickles (read opcode by opcode,
+    so nothing is imported or built)."""
+    stream = io.BytesIO(data)
+    while stream.tell() < len(data):
+        for opcode, _, _ in pickletools.genops(stream):
+            if opcode.name == "STOP":
+                break
+        else:
+            raise ValueError("truncated pickle")
+
+
+def _numba_files_ok(folder: Path) -> str | None:
+    """None if every numba cache file under ``folder`` is whole, else what is wrong."""
+    for path in sorted(folder.glob("*.nb[ic]")):
+        try:
+            _pickle_complete(path.read_bytes())
+        except Exception as error:  # any unreadable file is a corrupt entry
+            return f"{path.name}: {type(error).__name__}: {error}"
+    return None
+
+
+def _prepare_entry(folder: Path, source: str, label: str, description: str) -> None:
+    """Make ``folder`` hold a whole, readable entry for ``source``; repair it when corrupt."""
+    path = folder / SOURCE
+    body = _checked_source(path) if path.exists() else None
+    problem = None
+    if path.exists() and body != source:
+        problem = f"{SOURCE} does not match its checksum"
+    elif body is not None:
+        problem = _numba_files_ok(folder / "__pycache__")
+    if problem is not None:
+        warnings.warn(f"softcell: the compiled-model cache entry {folder} is corrupt "
+                      f"({problem}); rebuilding it", CacheWarning, stacklevel=4)
+        shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True, exist_ok=True)
+    if not path.exists():
+        meta = {"label": label, "description": description, "softcell": __version__,
+                "numba": numba.__version__, "environment": environment_key(),
+                "created": datetime.datetime.now().isoformat(timespec="seconds")}
+        _write_atomic(folder / "entry.json", json.dumps(meta, indent=1) + "\n")
+        _write_atomic(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n"
+                      + source)
+
+
+def _execute(name: str, filename: str, source: str, bindings: Mapping[str, object],
+             flags: Mapping[str, object]) -> types.ModuleType:
+    if _PARENT not in sys.modules:
+        parent = types.ModuleType(_PARENT)
+        parent.__path__ = []  # a namespace for the generated modules, so pickles find them
+        sys.modules[_PARENT] = parent
+    module = types.ModuleType(name)
+    module.__file__ = filename
+    module.__dict__.update(bindings)
+    module.__dict__["JIT_FLAGS"] = dict(flags)
+    # The header line shifts the body by one line, so that tracebacks and numba's
+    # per-function cache names match the file.
+    code = compile("\n" + source, filename, "exec")
+    sys.modules[name] = module
+    exec(code, module.__dict__)
+    return module
+
+
+def compile_module(label: str, source: str, bindings: Mapping[str, object],
+                   description: str = "") -> types.ModuleType:
+    """The module of generated ``source`` run with ``bindings`` in its namespace, its compiled
+    functions cached on disk.
+
+    Parameters
+    ----------
+    label : str
+        A short name of what the module composes (``"rodas4-loop"``); the entry's folder
+        starts with it.
+    source : str
+        Python source. Its compiled functions are declared ``@njit(**JIT_FLAGS)``; the
+        loader binds ``JIT_FLAGS`` (softcell's kernel flags, cached on disk).
+    bindings : mapping of str to compiled function or scalar
+        Global names the source uses: components' kernels, functions of other generated
+        modules, constants (bool, int, float, str).
+    description : str
+        What it is for (the components), shown by ``softcell cache``.
+
+    Returns
+    -------
+    module
+        Loaded once per process and key. When a bound function cannot be identified (a
+        closure, a function typed in a notebook), the module is compiled in memory instead,
+        with a :class:`~softcell.errors.CacheWarning` saying why.
+    """
+    try:
+        key = entry_key(source, bindings)
+    except NotCacheable as reason:
+        warnings.warn(f"softcell: {label} is compiled in this process only, not cached on "
+                      f"disk: {reason}", CacheWarning, stacklevel=2)
+        module = _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
+                          f"<softcell {label}>", source, bindings, _UNCACHED)
+        return module
+    folder = cache_dir() / f"{label}-{key[:20]}"
+    with _LOCK:
+        if str(folder) in _LOADED:
+            return _LOADED[str(folder)]
+        _prepare_entry(folder, source, label, description)
+        name = f"{_PARENT}.{label.replace('-', '_')}_{key[:20]}"
+        module = _execute(name, str(folder / SOURCE), source, bindings, _CACHED)
+        for value in vars(module).values():
+            if isinstance(value, CPUDispatcher) and value.py_func.__module__ == name:
+                _KEYS[id(value)] = key
+        _LOADED[str(folder)] = module
+        return module
+
+
+def compiled_function(label: str, source: str, name: str, bindings: Mapping[str, object],
+                      description: str = "") -> Callable[..., object]:
+    """The compiled function ``name`` of :func:`compile_module`'s module."""
+    return getattr(compile_module(label, source, bindings, description), name)
+
+
+def entries(root: Path | None = None) -> list[Entry]:
+    """The cache's entries, oldest first."""
+    root = cache_dir() if root is None else root
+    out: list[Entry] = []
+    if not root.is_dir():
+        return out
+    current = environment_key()
+    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+        try:
+            meta = json.loads((folder / "entry.json").read_text())
+        except (OSError, ValueError):
+            meta = {}
+        size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
+        out.append(Entry(folder, str(meta.get("label", "?")),
+                         str(meta.get("description", "")), str(meta.get("created", "?")),
+                         size, meta.get("environment") != current))
+    return sorted(out, key=lambda e: e.created)
+
+
+def clear(root: Path | None = None, stale_only: bool = False) -> int:
+    """Remove every entry (only the stale ones with ``stale_only``); return how many were
+    removed. Processes running from an entry keep what they loaded."""
+    root = cache_dir() if root is None else root
+    found = [e for e in entries(root) if e.stale or not stale_only]
+    for entry in found:
+        shutil.rmtree(entry.path, ignore_errors=True)
+    return len(found)

@@ -1,0 +1,91 @@
+"""The components' kernels composed into single compiled functions, through the on-disk cache
+of :mod:`softcell.core.engine.compiled`: the sum of the energy terms' partials, the sum of
+their second derivatives (with the central-difference fallback for terms that have none), and
+the drive's pose derivative.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from importlib import resources
+
+from softcell.core.engine.compiled import compiled_function
+
+PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
+                 "p0x, p0y, p1x, p1y, p2x, p2y, dpose")
+
+HESSIAN_ARGS = ("w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
+                "pose_tmp, hww, hwp, hpp")
+
+_PREAMBLE = "from numba import njit\n\n\n"
+
+
+def template(package: str, name: str) -> str:
+    """The text of the template ``name`` (a file of ``package``, never imported)."""
+    return resources.files(package).joinpath(name).read_text(encoding="utf-8")
+
+
+def _names(kernels: Sequence[Callable[..., object]]) -> str:
+    return " + ".join(getattr(getattr(k, "py_func", k), "__qualname__", "?") for k in kernels)
+
+
+def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., None]:
+    """One compiled function that calls every term's partials kernel in turn.
+
+    Its signature is that of a term kernel, except that ``coefficients`` is a tuple holding
+    one coefficient array per term.
+    """
+    calls = [f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
+             for i in range(len(kernels))] or ["    pass"]
+    source = (_PREAMBLE + f"@njit(**JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
+              + "\n".join(calls) + "\n")
+    bindings = {f"k{i}": k for i, k in enumerate(kernels)}
+    return compiled_function("partials", source, "total_partials", bindings,
+                             _names(kernels) or "no energy terms")
+
+
+def fd_hessian(partials: Callable[..., None]) -> Callable[..., None]:
+    """The documented fallback for an energy term without analytic second derivatives:
+    central differences of its partials kernel, ``fd_hessian(HESSIAN_ARGS)`` (see the
+    template's docstring for the steps), *adding* into ``hww``, ``hwp`` and ``hpp``."""
+    return compiled_function("fd-hessian", template(__package__ + ".templates",
+                                                    "fd_hessian.py"),
+                             "fd_hessian", {"partials": partials}, _names([partials]))
+
+
+def compose_hessians(terms) -> Callable[..., None]:
+    """One compiled function that adds every term's second derivatives into ``hww, hwp, hpp``
+    (which :func:`~softcell.kernels.jacobian.assemble_jacobian` leaves at zero after use): its
+    ``hessian_kernel`` where it has one, :func:`fd_hessian` of its partials otherwise.
+    ``coefficients`` is the tuple of the terms' arrays; ``w`` is float64[6, N]
+    (x, y, x', y', x'', y''); the other arguments are those of the fallback.
+    """
+    bindings: dict[str, object] = {}
+    lines = [f"@njit(**JIT_FLAGS)\ndef total_hessian({HESSIAN_ARGS}):"]
+    names = []
+    for i, term in enumerate(terms):
+        kernel = term.hessian_kernel()
+        if kernel is not None:
+            bindings[f"h{i}"] = kernel
+            lines.append(f"    h{i}(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, "
+                         f"coefficients[{i}], hww, hwp, hpp)")
+            names.append(_names([kernel]))
+        else:
+            bindings[f"h{i}"] = fd_hessian(term.partials_kernel())
+            args = HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
+            lines.append(f"    h{i}({args})")
+            names.append(f"differences of {_names([term.partials_kernel()])}")
+    if len(lines) == 1:
+        lines.append("    pass")
+    source = _PREAMBLE + "\n".join(lines) + "\n"
+    return compiled_function("hessians", source, "total_hessian", bindings,
+                             " + ".join(names) or "no energy terms")
+
+
+def fd_drive_jacobian(drive: Callable[..., None]) -> Callable[..., None]:
+    """d drive / d pose by central differences of the drive kernel, ``drive_jacobian(phase,
+    datum, pose, context, drive_coefficients, steps, pose_tmp, plus, minus, out)`` with
+    ``out[c, d]`` = d drive_c / d pose_d (steps ``steps[6:9]`` in cm, cm, rad)."""
+    return compiled_function("fd-drive", template(__package__ + ".templates",
+                                                  "fd_drive_jacobian.py"),
+                             "drive_jacobian", {"drive": drive}, _names([drive]))

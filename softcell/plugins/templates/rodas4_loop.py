@@ -1,0 +1,192 @@
+"""rodas4's right-hand side, its Jacobian and the compiled time loop, compiled per component
+set by :func:`softcell.plugins.rodas4.compiled_loop`: steps of the generic Rosenbrock method
+with RODAS4's tableau, step-size control, landing on the protocol's switches, and samples from
+the continuous extension.
+
+Bound: ``forces_s``, ``jacobian_s`` (the smooth terms on the coarse grid), ``forces_f``,
+``jacobian_f`` (the other terms on the N points), ``HAS_S``, ``ORDER_S``, ``HAS_F``,
+``ORDER_F`` (whether each group has terms, and the highest curve derivative it needs),
+``drive``, ``drive_jacobian`` and ``JIT_FLAGS``.
+"""
+# ruff: noqa: F821 (the names above are bound by the loader)
+
+import math
+
+import numpy as np
+from numba import njit
+
+from softcell.kernels.rosenbrock import (
+    dense_output,
+    dense_value,
+    error_norm,
+    factor_iteration_matrix,
+    stages,
+)
+from softcell.plugins.rodas4 import (
+    ERR_ACCEPTED,
+    GAMMA,
+    GROW_LIMIT,
+    H_ACCEPTED,
+    H_LAST,
+    H_NEXT,
+    JACOBIANS,
+    OK,
+    REJECTED,
+    REJECTED_LAST,
+    RHS_CALLS,
+    SAFETY,
+    SHRINK_LIMIT,
+    SINGULAR,
+    STEP_UNDERFLOW,
+    STEPS,
+    T_LAST,
+    T,
+    accumulate,
+)
+
+
+@njit(**JIT_FLAGS)
+def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobility,
+        bot_mobility, membrane, ws):
+    """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``.
+    ``coefficients``: (smooth group's, other group's)."""
+    m = ws.modes.size
+    pose = u[2 * m:]
+    drag = ws.drag
+    drag[:] = 0.0
+    if membrane:
+        for j in range(m):
+            ws.modes[j] = complex(u[j], u[m + j])
+        for j in range(m):
+            out[j] = 0.0
+            out[m + j] = 0.0
+        if HAS_S:
+            forces_s(ws.modes, pose, ORDER_S, context, coefficients[0], ws.smooth)
+            accumulate(ws.smooth, mobility, out, drag)
+        if HAS_F:
+            forces_f(ws.modes, pose, ORDER_F, context, coefficients[1], ws.fine)
+            accumulate(ws.fine, mobility, out, drag)
+    else:
+        out[:2 * m] = 0.0
+    drive(phase, datum, pose, context, drive_coefficients, ws.drv)
+    for c in range(3):
+        out[2 * m + c] = bot_mobility[c] * (ws.drv[c] - drag[c])
+
+
+@njit(**JIT_FLAGS)
+def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
+             bot_mobility, membrane, ws):
+    """The Jacobian at u into ``ws.jac``; the grids' ``w`` must hold the curves at u."""
+    m = ws.modes.size
+    pose = u[2 * m:]
+    ws.jac[:, :] = 0.0
+    if membrane:
+        if HAS_S:
+            jacobian_s(pose, context, coefficients[0], mobility, bot_mobility, ws.smooth, ws)
+        if HAS_F:
+            jacobian_f(pose, context, coefficients[1], mobility, bot_mobility, ws.fine, ws)
+    drive_jacobian(phase, datum, pose, context, drive_coefficients, ws.steps, ws.pose_tmp,
+                   ws.drv_plus, ws.drv_minus, ws.djac)
+    for c in range(3):
+        for d in range(3):
+            ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
+
+
+@njit(**JIT_FLAGS)
+def stage_rhs(y, out, args):
+    """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
+    phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, \
+        membrane, ws = args
+    rhs(y, phase, datum, out, coefficients, context, drive_coefficients, mobility,
+        bot_mobility, membrane, ws)
+
+
+@njit(**JIT_FLAGS)
+def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, phases, data,  # noqa: C901
+               coefficients, context, drive_coefficients, mobility, bot_mobility,
+               membrane, atol, rtol, max_step, a, cc, hd, ws):
+    t = clock[T]
+    p = phase_index[0]
+    k = ws.k
+    y = ws.y
+    ynew = ws.ynew
+    force = ws.force
+    mat = ws.mat
+    eps = 1e-12 * (1.0 + abs(t_end))
+    while t < t_end - eps:
+        t_switch = starts[p + 1] if p + 1 < starts.size else np.inf
+        phase, datum = phases[p], data[p]
+        rhs(u, phase, datum, ws.f0, coefficients, context, drive_coefficients, mobility,
+            bot_mobility, membrane, ws)
+        jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
+                 bot_mobility, membrane, ws)
+        counters[RHS_CALLS] += 1
+        counters[JACOBIANS] += 1
+        while True:
+            h = min(clock[H_NEXT], max_step)
+            land = False
+            if t_switch - t <= 1.05 * h:
+                h = t_switch - t
+                land = True
+            if h <= 1e-14 * (1.0 + abs(t)):
+                return STEP_UNDERFLOW
+            if not factor_iteration_matrix(ws.jac, h, GAMMA, mat, ws.pivots):
+                return SINGULAR
+            stages(stage_rhs, (phase, datum, coefficients, context, drive_coefficients,
+                               mobility, bot_mobility, membrane, ws),
+                   u, ws.f0, h, a, cc, mat, ws.pivots, k, y, force)
+            counters[RHS_CALLS] += cc.shape[0] - 1
+            err = error_norm(u, y, k, atol, rtol, ynew)
+            if not math.isfinite(err):
+                err = 1e10
+            fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err ** 0.25 / SAFETY))
+            if err <= 1.0:
+                if counters[STEPS] > 0:
+                    gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
+                    gus = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, gus / SAFETY))
+                    fac = max(fac, gus)
+                h_new = h / fac
+                if clock[REJECTED_LAST] > 0.0:
+                    h_new = min(h_new, h)
+                clock[H_ACCEPTED] = h
+                clock[ERR_ACCEPTED] = max(1e-2, err)
+                clock[REJECTED_LAST] = 0.0
+                dense_output(u, ynew, k, hd, dense)
+                u[:] = ynew
+                clock[T_LAST] = t
+                clock[H_LAST] = h
+                if land:
+                    t = t_switch
+                    p += 1
+                else:
+                    t = t + h
+                clock[T] = t
+                clock[H_NEXT] = h_new
+                counters[STEPS] += 1
+                break
+            clock[H_NEXT] = h / fac
+            clock[REJECTED_LAST] = 1.0
+            counters[REJECTED] += 1
+    phase_index[0] = p
+    if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
+        sample[:] = u
+    else:
+        dense_value(dense, (t_end - clock[T_LAST]) / clock[H_LAST], sample)
+    return OK
+
+
+@njit(**JIT_FLAGS)
+def integrate(u, clock, phase_index, counters, dense, targets, samples, starts, phases,
+              data, coefficients, context, drive_coefficients, mobility, bot_mobility,
+              membrane, atol, rtol, max_step, a, cc, hd, ws):
+    """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
+    write the state there into the matching row of ``samples`` from the last step's
+    continuous extension. Returns a status code."""
+    for r in range(targets.size):
+        status = advance_to(u, clock, phase_index, counters, dense, targets[r],
+                            samples[r], starts, phases, data, coefficients, context,
+                            drive_coefficients, mobility, bot_mobility, membrane, atol,
+                            rtol, max_step, a, cc, hd, ws)
+        if status != OK:
+            return status
+    return OK

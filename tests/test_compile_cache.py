@@ -1,0 +1,211 @@
+"""The on-disk cache of composed models (softcell.core.engine.compiled): a second process
+reads what the first compiled, a changed plugin is never served its old code, corrupt entries
+are rebuilt with a warning, processes starting at once do not trip over each other."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba import njit
+
+from softcell.core.engine import compiled
+from softcell.errors import CacheWarning
+
+SOURCE = textwrap.dedent("""
+    from numba import njit
+
+
+    @njit(**JIT_FLAGS)
+    def total(a):
+        s = 0.0
+        for v in a:
+            s += kernel(v) + OFFSET
+        return s
+""")
+
+# A plugin package with one kernel, written into a temporary folder put on sys.path.
+PLUGIN = textwrap.dedent("""
+    from numba import njit
+
+
+    @njit
+    def kernel(x):
+        return {factor} * x
+""")
+
+# In a new process: compose the plugin's kernel, call it, print the result and numba's
+# cache statistics of the composed function.
+CHILD = textwrap.dedent("""
+    import json, sys
+    import numpy as np
+    sys.path.insert(0, sys.argv[1])
+    from softcell.core.engine import compiled
+    from cachedplugin import kernel
+    source = open(sys.argv[2]).read()
+    module = compiled.compile_module("test", source, {"kernel": kernel, "OFFSET": 1.0})
+    value = module.total(np.arange(4.0))
+    stats = module.total.stats
+    print(json.dumps({"value": value, "hits": sum(stats.cache_hits.values()),
+                      "misses": sum(stats.cache_misses.values())}))
+""")
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    root = tmp_path / "cache"
+    monkeypatch.setenv(compiled.CACHE_ENV, str(root))
+    return root
+
+
+def _plugin(folder: Path, factor: float) -> Path:
+    package = folder / "cachedplugin"
+    package.mkdir(parents=True, exist_ok=True)
+    (package / "__init__.py").write_text(PLUGIN.format(factor=factor))
+    return folder
+
+
+def _child(cache: Path, plugin: Path, source: Path) -> subprocess.Popen:
+    env = {**os.environ, compiled.CACHE_ENV: str(cache)}
+    return subprocess.Popen([sys.executable, "-c", CHILD, str(plugin), str(source)], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _result(process: subprocess.Popen) -> dict:
+    out, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def test_a_second_process_reads_the_compiled_function_and_a_changed_plugin_recompiles(
+        cache, tmp_path):
+    source = tmp_path / "source.py"
+    source.write_text(SOURCE)
+    plugin = _plugin(tmp_path / "site", 2.0)
+    first = _result(_child(cache, plugin, source))
+    second = _result(_child(cache, plugin, source))
+    assert first == {"value": 2.0 * 6 + 4, "hits": 0, "misses": 1}
+    assert second == {"value": 2.0 * 6 + 4, "hits": 1, "misses": 0}
+    _plugin(tmp_path / "site", 3.0)  # the plugin's code changes: never its old entry
+    third = _result(_child(cache, plugin, source))
+    assert third == {"value": 3.0 * 6 + 4, "hits": 0, "misses": 1}
+    assert len(compiled.entries(cache)) == 2
+
+
+def test_processes_starting_at_once_share_one_entry(cache, tmp_path):
+    source = tmp_path / "source.py"
+    source.write_text(SOURCE)
+    plugin = _plugin(tmp_path / "site", 2.0)
+    children = [_child(cache, plugin, source) for _ in range(4)]
+    results = [_result(c) for c in children]
+    assert {r["value"] for r in results} == {16.0}
+    assert len(compiled.entries(cache)) == 1
+    assert _result(_child(cache, plugin, source))["hits"] == 1
+
+
+@njit
+def _double(x):
+    return 2.0 * x
+
+
+def _compile():
+    return compiled.compile_module("test", SOURCE, {"kernel": _double, "OFFSET": 1.0})
+
+
+def _forget():
+    compiled._LOADED.clear()
+
+
+@pytest.mark.parametrize("damage", ["index", "data", "source"])
+def test_a_corrupt_entry_is_rebuilt_with_a_warning(cache, damage):
+    module = _compile()
+    assert module.total(np.arange(4.0)) == 16.0
+    (folder,) = [e.path for e in compiled.entries(cache)]
+    if damage == "source":
+        path = folder / compiled.SOURCE
+    else:
+        (path,) = (folder / "__pycache__").glob("*.nbi" if damage == "index" else "*.nbc")
+    path.write_bytes(path.read_bytes()[: len(path.read_bytes()) // 2])
+    _forget()
+    with pytest.warns(CacheWarning, match="corrupt"):
+        module = _compile()
+    assert module.total(np.arange(4.0)) == 16.0
+    _forget()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        assert _compile().total(np.arange(4.0)) == 16.0  # whole again
+
+
+def test_a_closure_is_compiled_in_memory_with_a_warning(cache):
+    factor = 5.0
+
+    @njit
+    def closure(x):
+        return factor * x
+
+    with pytest.warns(CacheWarning, match="closure"):
+        module = compiled.compile_module("test", SOURCE, {"kernel": closure, "OFFSET": 0.0})
+    assert module.total(np.arange(4.0)) == 30.0
+    assert compiled.entries(cache) == []
+
+
+def test_bindings_other_than_compiled_functions_and_scalars_are_refused(cache):
+    with pytest.raises(TypeError, match="OFFSET"):
+        compiled.compile_module("test", SOURCE, {"kernel": _double, "OFFSET": np.ones(3)})
+
+
+def test_the_key_covers_constants_and_imports(cache, tmp_path):
+    base = compiled.entry_key(SOURCE, {"kernel": _double, "OFFSET": 1.0})
+    assert compiled.entry_key(SOURCE, {"kernel": _double, "OFFSET": 2.0}) != base
+    plugin = _plugin(tmp_path / "site", 2.0)
+    sys.path.insert(0, str(plugin))
+    try:
+        importing = SOURCE + "\nfrom cachedplugin import kernel as helper\n"
+        before = compiled.entry_key(importing, {"kernel": _double, "OFFSET": 1.0})
+        (plugin / "cachedplugin" / "__init__.py").write_text(PLUGIN.format(factor=7.0))
+        assert compiled.entry_key(importing, {"kernel": _double, "OFFSET": 1.0}) != before
+    finally:
+        sys.path.remove(str(plugin))
+        sys.modules.pop("cachedplugin", None)
+
+
+def test_the_cache_command_shows_and_clears(cache, capsys):
+    from softcell.cli import main
+
+    _compile()
+    assert main(["cache"]) == 0
+    out = capsys.readouterr().out
+    assert str(cache) in out and "1 entries" in out and "test-" in out
+    assert main(["cache", "clear", "--stale"]) == 0
+    assert "removed 0 stale entries" in capsys.readouterr().out
+    assert main(["cache", "clear"]) == 0
+    assert "removed 1 entries" in capsys.readouterr().out
+    assert compiled.entries(cache) == []
+
+
+def test_the_plugin_guide_example_composes_and_runs(cache):
+    import re
+    from types import SimpleNamespace
+
+    from softcell.plugins.run_and_tumble import run_and_tumble_drive
+
+    text = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
+    (block,) = [b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)
+                if "compile_module" in b]
+    namespace: dict = {}
+    exec(compile(block, "docs/plugins.md", "exec"), namespace)
+    loop = namespace["build_loop"](SimpleNamespace(drive=run_and_tumble_drive))
+    out, expected = np.zeros(3), np.zeros(3)
+    args = (0, 1.0, np.array([1.0, 2.0, 0.5]), np.array([10.0, 3.0, 2.0]),
+            np.array([0.04, 150.0]))
+    loop(*args, out)
+    run_and_tumble_drive(*args, expected)
+    assert np.array_equal(out, expected) and np.any(out != 0.0)
+    assert [e.label for e in compiled.entries(cache)] == ["my-loop"]
