@@ -209,3 +209,41 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
     run_and_tumble_drive(*args, expected)
     assert np.array_equal(out, expected) and np.any(out != 0.0)
     assert [e.label for e in compiled.entries(cache)] == ["my-loop"]
+
+
+MODEL_CHILD = textwrap.dedent("""
+    import json
+    import numpy as np
+    from softcell.core.engine import build_integrator, build_model, initial_state
+    from softcell.core.realization import realization_rng
+    from softcell.testing.compare import PROTOCOL, TERMS, parameters
+
+    params = parameters(6.0, 0.2)
+    model = build_model(params, TERMS, PROTOCOL)
+    stepper = build_integrator("rodas4", params).build(model)
+    modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
+    state = stepper.start(modes, pose, schedule)
+    stepper.sample(state, schedule, np.array([0.2]))
+    stats = stepper.integrate.stats
+    print(json.dumps({"pose": state["pose"].tolist(),
+                      "hits": sum(stats.cache_hits.values()),
+                      "misses": sum(stats.cache_misses.values())}))
+""")
+
+
+@pytest.mark.slow
+def test_the_built_in_model_is_compiled_once_per_machine(cache):
+    """A new process reads rodas4's loop from the cache the first one wrote, and gets the
+    same numbers."""
+    env = {**os.environ, compiled.CACHE_ENV: str(cache)}
+    runs = []
+    for _ in range(2):
+        done = subprocess.run([sys.executable, "-c", MODEL_CHILD], env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    assert (runs[0]["hits"], runs[0]["misses"]) == (0, 1)
+    assert (runs[1]["hits"], runs[1]["misses"]) == (1, 0)
+    assert runs[0]["pose"] == runs[1]["pose"]
+    labels = {e.label for e in compiled.entries(cache)}
+    assert {"rodas4-loop", "rodas4-grid", "partials", "hessians", "fd-drive"} <= labels
