@@ -91,7 +91,8 @@ def rows() -> list[dict[str, object]]:
                             f"{result['rhs_calls']} RHS, over 5 s"})
         out.append({"benchmark": f"ratio rodas4/explicit, R={radius:g}",
                     "value": result["rate"] / explicit[radius], "unit": "x",
-                    "target": 1000.0, "higher_is_better": True, "note": "goal 3000"})
+                    "target": 3000.0, "higher_is_better": True,
+                    "note": "the goal; 1000 was the first target"})
         out.append({"benchmark": f"rodas4 path error, R={radius:g}",
                     "value": max(result["bot"], result["cell"]), "unit": "cm", "target": 1e-4,
                     "note": f"bot {result['bot']:.1e}, cell {result['cell']:.1e}; coarse "
