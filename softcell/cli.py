@@ -574,8 +574,12 @@ def entry() -> None:
     """The console script: :func:`main`, then an exit that skips the interpreter's teardown
     of compiled code (~0.6 s after a simulation), once output is flushed and exit handlers
     have run."""
-    code = main()
-    sys.stdout.flush()
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader went away (`softcell cache | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 141
     sys.stderr.flush()
     atexit._run_exitfuncs()
     os._exit(code)

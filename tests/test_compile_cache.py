@@ -247,3 +247,12 @@ def test_the_built_in_model_is_compiled_once_per_machine(cache):
     assert runs[0]["pose"] == runs[1]["pose"]
     labels = {e.label for e in compiled.entries(cache)}
     assert {"rodas4-loop", "rodas4-grid", "partials", "hessians", "fd-drive"} <= labels
+
+
+def test_an_unwritable_cache_compiles_in_memory_with_a_warning(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv(compiled.CACHE_ENV, str(blocker / "cache"))
+    with pytest.warns(CacheWarning, match="cannot write"):
+        module = compiled.compile_module("test", SOURCE, {"kernel": _double, "OFFSET": 1.0})
+    assert module.total(np.arange(4.0)) == 16.0

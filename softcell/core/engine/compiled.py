@@ -350,7 +350,15 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
     with _LOCK:
         if str(folder) in _LOADED:
             return _LOADED[str(folder)]
-        _prepare_entry(folder, source, label, description)
+        try:
+            _prepare_entry(folder, source, label, description)
+        except OSError as error:
+            warnings.warn(f"softcell: cannot write the compiled-model cache at {folder.parent} "
+                          f"({error.strerror or error}); {label} is compiled in this process "
+                          f"only (set {CACHE_ENV} to a writable folder)", CacheWarning,
+                          stacklevel=2)
+            return _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
+                            f"<softcell {label}>", source, bindings, _UNCACHED)
         name = f"{_PARENT}.{label.replace('-', '_')}_{key[:20]}"
         module = _execute(name, str(folder / SOURCE), source, bindings, _CACHED)
         for value in vars(module).values():
