@@ -272,18 +272,27 @@ def _numba_files_ok(folder: Path) -> str | None:
 
 
 def _prepare_entry(folder: Path, source: str, label: str, description: str) -> None:
-    """Make ``folder`` hold a whole, readable entry for ``source``; repair it when corrupt."""
+    """Make ``folder`` hold a whole, readable entry for ``source``; repair it when corrupt.
+
+    Other processes may be writing the same entry at the same time (dask workers starting
+    together): they write the same bytes, each file by an atomic rename, so a file is either
+    absent or whole, and only a file that is there and wrong counts as corrupt.
+    """
     path = folder / SOURCE
-    body = _checked_source(path) if path.exists() else None
     problem = None
-    if path.exists() and body != source:
-        problem = f"{SOURCE} does not match its checksum"
-    elif body is not None:
-        problem = _numba_files_ok(folder / "__pycache__")
+    if path.exists():
+        body = _checked_source(path)
+        if body is None and not path.exists():
+            pass  # removed meanwhile by a process repairing it: written again below
+        elif body != source:
+            problem = f"{SOURCE} does not match its checksum"
+        else:
+            problem = _numba_files_ok(folder / "__pycache__")
     if problem is not None:
         warnings.warn(f"softcell: the compiled-model cache entry {folder} is corrupt "
                       f"({problem}); rebuilding it", CacheWarning, stacklevel=4)
-        shutil.rmtree(folder, ignore_errors=True)
+        shutil.rmtree(folder / "__pycache__", ignore_errors=True)
+        path.unlink(missing_ok=True)
     folder.mkdir(parents=True, exist_ok=True)
     if not path.exists():
         meta = {"label": label, "description": description, "softcell": __version__,
