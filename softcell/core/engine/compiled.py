@@ -321,6 +321,12 @@ def _execute(name: str, filename: str, source: str, bindings: Mapping[str, objec
     return module
 
 
+def _in_memory(label: str, source: str, bindings: Mapping[str, object]) -> types.ModuleType:
+    """The module compiled in this process only (not cacheable or no writable cache)."""
+    return _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
+                    f"<softcell {label}>", source, bindings, _UNCACHED)
+
+
 def compile_module(label: str, source: str, bindings: Mapping[str, object],
                    description: str = "") -> types.ModuleType:
     """The module of generated ``source`` run with ``bindings`` in its namespace, its compiled
@@ -352,9 +358,7 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
     except NotCacheable as reason:
         warnings.warn(f"softcell: {label} is compiled in this process only, not cached on "
                       f"disk: {reason}", CacheWarning, stacklevel=2)
-        module = _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
-                          f"<softcell {label}>", source, bindings, _UNCACHED)
-        return module
+        return _in_memory(label, source, bindings)
     folder = cache_dir() / f"{label}-{key[:20]}"
     with _LOCK:
         if str(folder) in _LOADED:
@@ -366,8 +370,7 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
                           f"({error.strerror or error}); {label} is compiled in this process "
                           f"only (set {CACHE_ENV} to a writable folder)", CacheWarning,
                           stacklevel=2)
-            return _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
-                            f"<softcell {label}>", source, bindings, _UNCACHED)
+            return _in_memory(label, source, bindings)
         name = f"{_PARENT}.{label.replace('-', '_')}_{key[:20]}"
         module = _execute(name, str(folder / SOURCE), source, bindings, _CACHED)
         for value in vars(module).values():

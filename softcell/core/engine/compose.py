@@ -6,6 +6,7 @@ the drive's pose derivative.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from importlib import resources
 
@@ -20,8 +21,10 @@ HESSIAN_ARGS = ("w, pose, context, coefficients, steps, saved, plus, minus, dplu
 _PREAMBLE = "from numba import njit\n\n\n"
 
 
+@functools.cache
 def template(package: str, name: str) -> str:
-    """The text of the template ``name`` (a file of ``package``, never imported)."""
+    """The text of the template ``name`` (a file of ``package``, never imported); read once
+    per process."""
     return resources.files(package).joinpath(name).read_text(encoding="utf-8")
 
 
