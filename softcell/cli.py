@@ -314,6 +314,8 @@ def _add_component_choice(p: argparse.ArgumentParser) -> None:
     p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
     p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
                    "paper's scheme, the reference)")
+    p.add_argument("--friction-law", help="the membrane's friction law (default viscous, the "
+                   "paper's; coulomb adds a static threshold)")
     p.add_argument("--energy-terms", help="comma-separated energy terms")
 
 
@@ -530,6 +532,7 @@ def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
 def _component_flags(args: argparse.Namespace) -> dict[str, Any]:
     components: dict[str, Any] = {k: v for k, v in (
         ("driving_protocol", getattr(args, "protocol", None)),
+        ("friction_law", getattr(args, "friction_law", None)),
         ("integrator", getattr(args, "integrator", None))) if v}
     if getattr(args, "energy_terms", None):
         components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]

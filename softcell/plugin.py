@@ -1,13 +1,14 @@
 """Everything a plugin author imports, from one module.
 
 A plugin is a module with functions named after the hooks (``softcell_energy_terms``,
-``softcell_driving_protocols``, ``softcell_integrators``, ``softcell_stopgo_detectors``),
+``softcell_driving_protocols``, ``softcell_friction_laws``, ``softcell_integrators``,
+``softcell_stopgo_detectors``),
 each marked with :data:`hookimpl` and returning a list of component classes, registered under
 the entry-point group ``softcell``. ``docs/plugins.md`` is the tutorial; the names below are
 the public interface, and everything else in softcell is private and may move.
 
 Contracts (subclass one per component)
-    :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`Integrator`,
+    :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`FrictionLaw`, :class:`Integrator`,
     :class:`StopGoDetector`; what an integrator returns: :class:`Stepper`; what a protocol
     draws: :class:`Schedule`; what an integrator composes: :class:`Model`.
 Parameters
@@ -41,6 +42,7 @@ from softcell.core.plugin.contracts import (
     Component,
     DrivingProtocol,
     EnergyTerm,
+    FrictionLaw,
     Integrator,
     Schedule,
     Stepper,
@@ -73,6 +75,7 @@ __all__ = [
     "DrivingProtocol",
     "EnergyTerm",
     "ExplicitEulerStepper",
+    "FrictionLaw",
     "Integrator",
     "Model",
     "ParameterError",

@@ -27,8 +27,10 @@ def fake_entry_points(tmp_path, monkeypatch, **plugins):
 
 def test_builtins_register_through_the_hooks():
     registry = Registry(entry_points=[])
-    assert set(KINDS.values()) == {"energy_term", "driving_protocol", "integrator",
-                                   "stopgo_detector"}
+    assert set(KINDS.values()) == {"energy_term", "driving_protocol", "friction_law",
+                                   "integrator", "stopgo_detector"}
+    assert registry.names("friction_law") == ["coulomb", "viscous"]
+    assert "arena" in registry.names("energy_term")
     entry = registry.entries("stopgo_detector")[0]
     assert entry.component.name == "threshold"
     assert entry.origin.startswith("built-in")

@@ -9,6 +9,7 @@ A configuration file has up to three tables::
     [components]            # chosen by name from the plugin registry
     energy_terms = ["bending", "tension", "contact"]
     driving_protocol = "run_and_tumble"
+    friction_law = "viscous"
     integrator = "rodas4"
     stopgo_detector = "threshold"
 
@@ -32,6 +33,7 @@ from softcell.errors import ConfigError
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],
     "driving_protocol": "run_and_tumble",
+    "friction_law": "viscous",
     "integrator": "rodas4",
     "stopgo_detector": "threshold",
 }
@@ -69,7 +71,7 @@ class RunConfig:
                 raise ConfigError(f"energy term {name!r} is named twice in energy_terms = "
                                   f"{list(terms)}: each term counts once")
             registry.get("energy_term", name)
-        for kind in ("driving_protocol", "integrator", "stopgo_detector"):
+        for kind in ("driving_protocol", "friction_law", "integrator", "stopgo_detector"):
             name = self.components.get(kind)
             if not isinstance(name, str):
                 raise ConfigError(f"{kind} = {name!r} is not allowed: must be a name")

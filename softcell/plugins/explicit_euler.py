@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from softcell.core.engine import Model, Stepper, explicit_decay_rate
+from softcell.core.engine import Model, Stepper, explicit_decay_rate, friction
 from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.compose import template
+from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import MODEL_PARAMETERS
 from softcell.core.plugin.contracts import Integrator, Schedule
 from softcell.core.plugin.hookspecs import hookimpl
@@ -30,12 +30,19 @@ class ExplicitEulerStepper(Stepper):
     """
 
     def __init__(self, model: Model, dt: float) -> None:
+        law = friction.compiled_friction(model.friction) if model.nonlinear_friction else None
         self.segment = compile_module(
             "explicit-euler", template(__package__ + ".templates", "explicit_euler.py"),
-            {"partials": model.partials, "drive": model.drive},
-            f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}",
+            {"partials": model.partials, "drive": model.drive, "LAW": law is not None,
+             # unused (and pruned by numba) with the linear law, or without bot energies
+             "friction_velocity": law.velocity if law else 0,
+             "HAS_BOT": bool(model.bot_terms),
+             "bot_forces": compose_bot(model.terms)[0] if model.bot_terms else 0},
+            f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}"
+            + (f"; {model.friction.name}" if law else ""),
         ).segment
         self.model, self.dt = model, dt
+        self.law = friction.model_workspace(model, 2 * (2 * model.cutoff + 1) + 3)
 
     def start(self, modes, pose, schedule):
         return {"modes": modes.astype(np.complex128).copy(),
@@ -52,7 +59,7 @@ class ExplicitEulerStepper(Stepper):
             state["modes"], state["pose"], int(state["step"][0]), int(state["phase_index"][0]),
             int(target - state["step"][0]), self.dt, schedule.start, schedule.phase,
             schedule.data, m.coefficients, m.context, m.drive_coefficients,
-            m.membrane_mobility, m.bot_mobility, m.nodes, m.has_membrane)
+            friction.mobility(m), m.bot_mobility, m.nodes, m.has_membrane, self.law)
         state["step"][0], state["phase_index"][0] = step, p
         state["time"][0] = step * self.dt
 

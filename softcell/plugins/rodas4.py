@@ -26,9 +26,10 @@ from softcell.core.engine import (
     compose_hessians,
     compose_partials,
     fd_drive_jacobian,
+    friction,
 )
 from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.compose import template
+from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import ParameterSpec
 from softcell.core.plugin.contracts import Integrator, Schedule
 from softcell.core.plugin.hookspecs import hookimpl
@@ -82,7 +83,7 @@ Grid = namedtuple("Grid", [
 Workspace = namedtuple("Workspace", [
     "modes", "smooth", "fine", "drv", "steps", "dplus", "dminus", "pose_tmp", "djac",
     "drv_plus", "drv_minus", "a_hat", "b_hat", "g_hat", "cal_a", "cal_b", "factors", "orders",
-    "jac", "mat", "pivots", "k", "f0", "y", "ynew", "force", "drag"])
+    "jac", "mat", "pivots", "k", "f0", "y", "ynew", "force", "drag", "law", "bot_hpp"])
 
 
 def grid(n: int, m: int) -> Grid:
@@ -114,7 +115,7 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         factors=np.zeros((3, m), c), orders=np.zeros((3, m), c), jac=np.zeros((nu, nu)),
         mat=np.zeros((nu, nu)), pivots=np.zeros(nu, np.int64), k=np.zeros((6, nu)),
         f0=np.zeros(nu), y=np.zeros(nu), ynew=np.zeros(nu), force=np.zeros(nu),
-        drag=np.zeros(3))
+        drag=np.zeros(3), law=friction.model_workspace(model, nu), bot_hpp=np.zeros((3, 3)))
 
 
 @njit(**JIT)
@@ -145,7 +146,8 @@ def _names(terms) -> str:
 def compiled_loop(model: Model) -> tuple:
     """(rhs, jacobian, integrate) compiled for the model's terms and drive: generated modules
     from ``templates/rodas4_grid.py`` (once per group of terms) and
-    ``templates/rodas4_loop.py``, cached on disk (:mod:`softcell.core.engine.compiled`)."""
+    ``templates/rodas4_loop.py``, cached on disk (:mod:`softcell.core.engine.compiled`), with
+    the model's friction law when it is nonlinear (:mod:`softcell.core.engine.friction`)."""
     grid_source = template(__package__ + ".templates", "rodas4_grid.py")
     bindings: dict[str, object] = {}
     for suffix, group in zip("sf", groups(model), strict=True):
@@ -162,11 +164,20 @@ def compiled_loop(model: Model) -> tuple:
         bindings[f"HAS_{suffix.upper()}"] = bool(terms)
         bindings[f"ORDER_{suffix.upper()}"] = max([t.derivative_order for t in terms],
                                                   default=0)
+        bindings[f"HAS_BOT_{suffix.upper()}"] = any(t.acts_on_bot for t in terms)
+        bindings[f"bot_forces_{suffix}"], bindings[f"bot_hessians_{suffix}"] = \
+            compose_bot(terms) if any(t.acts_on_bot for t in terms) else (0, 0)
     bindings["drive"] = model.drive
     bindings["drive_jacobian"] = fd_drive_jacobian(model.drive)
+    bindings["LAW"] = model.nonlinear_friction
+    law = friction.compiled_friction(model.friction) if model.nonlinear_friction else None
+    # unused (and pruned by numba) with the linear law
+    bindings["friction_velocity"] = law.velocity if law else 0
+    bindings["friction_jacobian"] = law.jacobian if law else 0
     loop = compile_module("rodas4-loop", template(__package__ + ".templates",
                                                   "rodas4_loop.py"), bindings,
-                          f"{_names(model.terms)}; {model.protocol.name}")
+                          f"{_names(model.terms)}; {model.protocol.name}"
+                          + (f"; {model.friction.name}" if law else ""))
     return loop.rhs, loop.jacobian, loop.integrate
 
 
@@ -219,7 +230,7 @@ class Rodas4Stepper(Stepper):
             state["u"], state["clock"], state["phase_index"], state["counters"],
             state["dense"], times, samples, schedule.start, schedule.phase,
             schedule.data, self.coefficients, m.context, m.drive_coefficients,
-            m.membrane_mobility, m.bot_mobility, m.has_membrane, self.atol, self.rtol,
+            friction.mobility(m), m.bot_mobility, m.has_membrane, self.atol, self.rtol,
             self.max_step, RODAS4.a, RODAS4.c, RODAS4.dense, self.ws)
         if status != OK:
             t = state["clock"][T]

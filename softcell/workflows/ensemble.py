@@ -56,10 +56,11 @@ class Task:
 
     @property
     def stored_components(self) -> dict[str, Any]:
-        """The component names as its file stores them (a free bot has no energy terms)."""
+        """The component names as its file stores them (a free bot keeps only the energy terms
+        that act on the bot alone, such as the arena)."""
         components = {**self.components, "membrane": self.membrane}
         if not self.membrane:
-            components["energy_terms"] = []
+            components["energy_terms"] = bot_terms(self.components.get("energy_terms", []))
         return components
 
     def request(self, extra_specs: Iterable[ParameterSpec] = ()) -> dict[str, Any]:
@@ -68,6 +69,14 @@ class Task:
         params = json.loads(Parameters(self.values, extra_specs).to_attrs()["softcell_parameters"])
         return _request(params, self.stored_components, self.seed,
                         f"{self.point},{self.realization}", __version__)
+
+
+def bot_terms(names: Iterable[str]) -> list[str]:
+    """Of the energy terms ``names``, those that act on the bot alone (what a free bot keeps)."""
+    from softcell.core.plugin.registry import get_registry
+
+    registry = get_registry()
+    return [n for n in names if registry.get("energy_term", n).acts_on_bot]
 
 
 def _request(parameters: dict[str, Any], components: dict[str, Any], seed: Any,
@@ -130,7 +139,8 @@ def _model_and_stepper(task: Task, extra_specs) -> tuple[Model, Stepper]:
     if key not in _BUILT:
         params = Parameters(task.values, extra_specs)
         model = build_model(params, task.components["energy_terms"],
-                            task.components["driving_protocol"], membrane=task.membrane)
+                            task.components["driving_protocol"], membrane=task.membrane,
+                            friction_law=task.components.get("friction_law", "viscous"))
         integrator = build_integrator(task.components["integrator"], params)
         _BUILT[key] = (model, integrator.build(model))
     return _BUILT[key]

@@ -10,7 +10,7 @@ import functools
 from collections.abc import Callable, Sequence
 from importlib import resources
 
-from softcell.core.engine.compiled import compiled_function
+from softcell.core.engine.compiled import compile_module, compiled_function
 
 PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
                  "p0x, p0y, p1x, p1y, p2x, p2y, dpose")
@@ -92,3 +92,42 @@ def fd_drive_jacobian(drive: Callable[..., None]) -> Callable[..., None]:
     return compiled_function("fd-drive", template(__package__ + ".templates",
                                                   "fd_drive_jacobian.py"),
                              "drive_jacobian", {"drive": drive}, _names([drive]))
+
+
+BOT_ARGS = "pose, context, coefficients, dpose"
+BOT_HESSIAN_ARGS = "pose, context, coefficients, steps, pose_tmp, plus, minus, hpp"
+
+
+def compose_bot(terms) -> tuple[Callable[..., None], Callable[..., None]]:
+    """The terms' energies of the bot alone (:meth:`EnergyTerm.bot_kernel`), summed:
+    ``bot_forces(BOT_ARGS)`` adds dU/dpose into ``dpose`` and ``bot_hessians(BOT_HESSIAN_ARGS)``
+    adds d^2 U / dpose^2 into ``hpp`` (the term's ``bot_hessian_kernel``, or central
+    differences of its ``bot_kernel`` with the steps ``steps[6:9]``). ``coefficients`` is the
+    tuple of the terms' arrays; terms without a bot kernel are skipped."""
+    bindings: dict[str, object] = {}
+    forces = [f"@njit(**JIT_FLAGS)\ndef bot_forces({BOT_ARGS}):"]
+    hessians = [f"@njit(**JIT_FLAGS)\ndef bot_hessians({BOT_HESSIAN_ARGS}):"]
+    names = []
+    for i, term in enumerate(terms):
+        kernel = term.bot_kernel()
+        if kernel is None:
+            continue
+        bindings[f"b{i}"] = kernel
+        forces.append(f"    b{i}(pose, context, coefficients[{i}], dpose)")
+        hessian = term.bot_hessian_kernel()
+        if hessian is None:
+            bindings[f"bh{i}"] = compiled_function(
+                "fd-bot-hessian", template(__package__ + ".templates", "fd_bot_hessian.py"),
+                "fd_bot_hessian", {"bot": kernel}, _names([kernel]))
+            args = BOT_HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
+            hessians.append(f"    bh{i}({args})")
+        else:
+            bindings[f"bh{i}"] = hessian
+            hessians.append(f"    bh{i}(pose, context, coefficients[{i}], hpp)")
+        names.append(_names([kernel]))
+    for lines in (forces, hessians):
+        if len(lines) == 1:
+            lines.append("    pass")
+    source = _PREAMBLE + "\n".join(forces) + "\n\n\n" + "\n".join(hessians) + "\n"
+    module = compile_module("bot-energies", source, bindings, " + ".join(names) or "none")
+    return module.bot_forces, module.bot_hessians

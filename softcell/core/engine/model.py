@@ -15,7 +15,13 @@ import numpy as np
 
 from softcell.core.engine.compose import compose_partials
 from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import DrivingProtocol, EnergyTerm, Integrator, check_kernels
+from softcell.core.plugin.contracts import (
+    DrivingProtocol,
+    EnergyTerm,
+    FrictionLaw,
+    Integrator,
+    check_kernels,
+)
 from softcell.core.plugin.registry import get_registry
 
 
@@ -27,7 +33,8 @@ class Model:
     ----------
     params : Parameters
     terms : list of EnergyTerm
-        Empty for a free bot (no membrane).
+        For a free bot (``membrane`` False), only the terms that act on the bot alone
+        (:meth:`EnergyTerm.bot_kernel`; the arena's walls).
     protocol : DrivingProtocol
     partials : compiled function
         Sum of the terms' partials kernels (see :func:`compose_partials`).
@@ -41,6 +48,12 @@ class Model:
         2 pi / (gamma_mem l0) (cm^2 N^-1 s^-1 per unit xi): dg_k/dt = membrane_mobility f_hat_k.
     bot_mobility : float64[3]
         1/gamma_T, 1/gamma_T (cm N^-1 s^-1) and 1/gamma_R (N^-1 cm^-1 s^-1).
+    friction : FrictionLaw
+        The membrane's friction law; ``friction_coefficients`` its coefficients. When it is
+        not ``linear``, an integrator evaluates the force density
+        f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at the N points, applies the law's
+        kernel there and moves the modes by the velocity's modes |k| <= Lc
+        (``force_scale`` = 2 pi / l0, cm^-1).
     """
 
     params: Parameters
@@ -55,18 +68,33 @@ class Model:
     bot_mobility: np.ndarray
     nodes: int
     cutoff: int
+    membrane: bool = True
+    friction: FrictionLaw | None = None
+    friction_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    force_scale: float = 1.0
     names: dict[str, object] = field(default_factory=dict)
 
     @property
     def has_membrane(self) -> bool:
-        return bool(self.terms)
+        return self.membrane and bool(self.terms)
+
+    @property
+    def bot_terms(self) -> list[EnergyTerm]:
+        """The terms with an energy of the bot alone (:meth:`EnergyTerm.bot_kernel`)."""
+        return [t for t in self.terms if t.acts_on_bot]
 
     @property
     def couples_bot(self) -> bool:
         return any(t.couples_bot for t in self.terms)
 
+    @property
+    def nonlinear_friction(self) -> bool:
+        """True when the friction law is not the linear v = f / gamma_mem (integrators then
+        apply the law's kernel)."""
+        return self.has_membrane and self.friction is not None and not self.friction.linear
+
 def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
-                membrane: bool = True) -> Model:
+                membrane: bool = True, friction_law: str = "viscous") -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
 
     Parameters
@@ -78,7 +106,10 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
     protocol : str
         Name of a registered driving protocol.
     membrane : bool
-        False for a free bot: no membrane, no energy terms.
+        False for a free bot: no membrane; of ``energy_terms`` only those acting on the bot
+        alone are kept (the arena's walls).
+    friction_law : str
+        Name of a registered friction law (``viscous``, the paper's, by default).
 
     Raises
     ------
@@ -86,9 +117,12 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
         When a component's kernel does not compile for its contract's signature.
     """
     registry = get_registry()
-    terms = [registry.get("energy_term", n)(params) for n in energy_terms] if membrane else []
+    terms = [registry.get("energy_term", n)(params) for n in energy_terms]
+    if not membrane:
+        terms = [t for t in terms if t.acts_on_bot]
     drive = registry.get("driving_protocol", protocol)(params)
-    for component in (*terms, drive):
+    friction: FrictionLaw = registry.get("friction_law", friction_law)(params)
+    for component in (*terms, drive, friction):
         check_kernels(component, registry.origin(component.kind, component.name))
     kernels = [t.partials_kernel() for t in terms]
     coefficients = tuple(np.ascontiguousarray(t.coefficients()) for t in terms)
@@ -103,9 +137,12 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
         membrane_mobility=2 * math.pi / (float(params.membrane_friction) * l0),
         bot_mobility=np.array([1 / float(params.bot_friction), 1 / float(params.bot_friction),
                                1 / float(params.bot_rotational_friction)]),
-        nodes=int(params.nodes), cutoff=int(params.cutoff),
-        names={"energy_terms": list(energy_terms) if membrane else [],
-               "driving_protocol": protocol},
+        nodes=int(params.nodes), cutoff=int(params.cutoff), friction=friction,
+        friction_coefficients=np.ascontiguousarray(friction.coefficients()),
+        force_scale=2 * math.pi / l0,
+        membrane=membrane,
+        names={"energy_terms": [t.name for t in terms],
+               "driving_protocol": protocol, "friction_law": friction_law},
     )
 
 def build_integrator(name: str, params: Parameters) -> Integrator:

@@ -1,4 +1,4 @@
-"""The four component contracts: one base class per kind of plugin component.
+"""The five component contracts: one base class per kind of plugin component.
 
 Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
 ``description``, an explicit parameter declaration, and explicit methods; there is no
@@ -34,8 +34,8 @@ class Component(ABC):
     Class attributes
     ----------------
     kind : str
-        Set by the contract class: ``energy_term``, ``driving_protocol``, ``integrator`` or
-        ``stopgo_detector``.
+        Set by the contract class: ``energy_term``, ``driving_protocol``, ``friction_law``,
+        ``integrator`` or ``stopgo_detector``.
     name : str
         Unique within its kind; lower case, digits and underscores (``run_and_tumble``).
     description : str
@@ -103,6 +103,8 @@ class EnergyTerm(Component):
         "partials_kernel": f"void({', '.join([VECTOR] * 16)})",
         "hessian_kernel": f"void({', '.join([VECTOR] * 9)}, float64[:, :, ::1], "
                           "float64[:, :, ::1], float64[:, ::1])",
+        "bot_kernel": f"void({', '.join([VECTOR] * 4)})",
+        "bot_hessian_kernel": f"void({', '.join([VECTOR] * 3)}, float64[:, ::1])",
     }
     #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
     couples_bot: ClassVar[bool] = False
@@ -115,6 +117,9 @@ class EnergyTerm(Component):
     #: Highest derivative of gamma the density reads (0, 1 or 2). Integrators may skip
     #: evaluating higher ones for this term (they are then passed as zeros).
     derivative_order: ClassVar[int] = 2
+    #: True if the term also has an energy of the bot alone (:meth:`bot_kernel`, which must
+    #: then return a kernel): such terms act on a free bot too.
+    acts_on_bot: ClassVar[bool] = False
 
     @abstractmethod
     def partials_kernel(self) -> Callable[..., None]:
@@ -155,6 +160,35 @@ class EnergyTerm(Component):
         only, so 2 x 9 kernel calls give every point's Hessian). It is accurate to ~1e-9
         relative for smooth terms; an analytic kernel is faster, which matters when the
         term is evaluated at many points.
+        """
+        return None
+
+    def bot_kernel(self) -> Callable[..., None] | None:
+        """Return the compiled kernel of the term's energy of the bot alone, or None.
+
+        Some terms act on the bot directly, not through the membrane (the arena's walls).
+        Their energy U(pose) (N cm) enters the bot's equations of motion as -dU/dpose, with or
+        without a membrane: a free bot (``--free-bot``) keeps exactly the terms that have this
+        kernel. Kernel signature::
+
+            kernel(pose, context, coefficients, dpose) -> None
+
+        Arrays as in :meth:`partials_kernel`; the kernel *adds* dU/d(x_bot, y_bot, theta_bot)
+        (N, N, N cm) into ``dpose``. It must not allocate. The default, None: the term acts
+        on the membrane only.
+        """
+        return None
+
+    def bot_hessian_kernel(self) -> Callable[..., None] | None:
+        """Return the compiled kernel of d^2 U / d pose^2 for :meth:`bot_kernel`, or None.
+
+        Kernel signature::
+
+            kernel(pose, context, coefficients, hpp) -> None
+
+        The kernel *adds* d^2 U / d pose_c d pose_d into ``hpp[c, d]`` (float64[3, 3];
+        N/cm, N, N cm). The default, None, selects central differences of :meth:`bot_kernel`
+        (steps 1e-7 l0 / 2 pi in x, y and 1e-7 rad in the heading).
         """
         return None
 
@@ -221,6 +255,55 @@ class DrivingProtocol(Component):
         ``coefficients`` as for :meth:`EnergyTerm.partials_kernel`. The kernel writes the
         drive force x, y (N) and torque about the bot's center (N cm) into ``out[0:3]``.
         """
+
+
+class FrictionLaw(Component):
+    """How a membrane element moves under the force on it: a pointwise map from the force
+    density f (N cm^-1, per unit length of membrane) to the element's velocity v (cm s^-1)
+    (docs/model.md §3). The engine evaluates the force density of the cut-off modes at the N
+    collocation points, applies the law there, and keeps the velocity's modes |k| <= Lc, so
+    the shape stays band-limited whatever the law.
+
+    The built-in ``viscous`` law, v = f / gamma_mem, is the paper's; it is ``linear``, and
+    integrators then keep their direct path (the law's kernels are not called).
+    """
+
+    kind = "friction_law"
+    kernels = {
+        "velocity_kernel": f"void({', '.join([VECTOR] * 5)})",
+        "derivative_kernel": f"void({', '.join([VECTOR] * 7)})",
+    }
+    #: True only for v = f / membrane_friction exactly (the built-in ``viscous``): integrators
+    #: then move the modes by the force modes times 2 pi / (gamma_mem l0), as they always did.
+    linear: ClassVar[bool] = False
+
+    @abstractmethod
+    def velocity_kernel(self) -> Callable[..., None]:
+        """Return the compiled (``numba.njit``) kernel of the law.
+
+        Kernel signature::
+
+            kernel(fx, fy, coefficients, vx, vy) -> None
+
+        ``fx, fy``: float64[N], the force density on the membrane at the N points (N cm^-1);
+        ``coefficients``: float64[:], from :meth:`coefficients`. The kernel writes the
+        velocity (cm s^-1) into ``vx, vy`` (float64[N]). It must not allocate.
+        """
+
+    def derivative_kernel(self) -> Callable[..., None] | None:
+        """Return the compiled kernel of the law's derivative, or None.
+
+        Kernel signature::
+
+            kernel(fx, fy, coefficients, dxx, dxy, dyx, dyy) -> None
+
+        Arrays as in :meth:`velocity_kernel`; the kernel writes d v_a / d f_b
+        (cm^2 N^-1 s^-1) into ``dab`` (float64[N]) for a, b in x, y. Linearly implicit
+        integrators (``rodas4``) need it for their Jacobian. The default, None, selects the
+        documented fallback: central differences of :meth:`velocity_kernel` with the step
+        ``1e-6 (|f| + 1e-8 N/cm)`` per component.
+        """
+        return None
 
 
 class Integrator(Component):
@@ -300,6 +383,7 @@ class StopGoDetector(Component):
 CONTRACTS: dict[str, type[Component]] = {
     "softcell_energy_terms": EnergyTerm,
     "softcell_driving_protocols": DrivingProtocol,
+    "softcell_friction_laws": FrictionLaw,
     "softcell_integrators": Integrator,
     "softcell_stopgo_detectors": StopGoDetector,
 }

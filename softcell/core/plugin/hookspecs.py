@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from softcell.core.plugin.contracts import (
         DrivingProtocol,
         EnergyTerm,
+        FrictionLaw,
         Integrator,
         StopGoDetector,
     )
@@ -60,6 +61,23 @@ def softcell_driving_protocols() -> list[type[DrivingProtocol]]:
         phase schedule (start times in s, phase codes, per-phase data) from a
         :class:`numpy.random.Generator`, and supplies a compiled kernel that maps the phase and
         the bot's state (x, y in cm, heading in rad) to a drive force (N) and torque (N cm).
+
+    Called once when the registry is built.
+    """
+
+
+@hookspec
+def softcell_friction_laws() -> list[type[FrictionLaw]]:
+    """Friction laws (how a membrane element moves under the force on it) this plugin
+    provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.plugin.FrictionLaw`. Each supplies a compiled kernel
+        mapping the force density at the membrane's collocation points (N cm^-1, per unit
+        length) to their velocity (cm s^-1), and optionally its derivative
+        (cm^2 N^-1 s^-1), for implicit integrators.
 
     Called once when the registry is built.
     """

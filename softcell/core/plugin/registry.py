@@ -33,7 +33,8 @@ DISABLE_ENV = "SOFTCELL_DISABLE_PLUGINS"
 
 #: Built-in plugin modules, registered through the same hooks as third-party plugins.
 BUILTIN_PLUGINS: tuple[str, ...] = tuple(f"softcell.plugins.{name}" for name in (
-    "bending", "tension", "contact", "run_and_tumble", "explicit_euler", "rodas4", "threshold"))
+    "bending", "tension", "contact", "arena", "run_and_tumble", "friction", "explicit_euler",
+    "rodas4", "threshold"))
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
 __all__ = ["KINDS", "PluginWarning", "Registered", "Registry", "get_registry", "registered"]

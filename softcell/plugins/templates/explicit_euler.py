@@ -1,10 +1,13 @@
 """The explicit scheme's time loop, compiled per component set by
 :class:`softcell.plugins.explicit_euler.ExplicitEulerStepper`.
 
-Bound: ``partials`` (the composed energy terms), ``drive`` (the protocol's kernel) and
+Bound: ``partials`` (the composed energy terms), ``drive`` (the protocol's kernel), ``LAW``
+(whether the friction law is nonlinear; then ``friction_velocity`` is its compiled velocity,
+from ``core/engine/templates/friction.py``, and ``mobility`` is 1), ``HAS_BOT`` (whether
+some term has an energy of the bot alone; then ``bot_forces`` is their sum) and
 ``JIT_FLAGS``.
 """
-# ruff: noqa: F821 (partials, drive and JIT_FLAGS are bound by the loader)
+# ruff: noqa: F821 (the names above are bound by the loader)
 
 import math
 
@@ -17,7 +20,7 @@ from softcell.kernels.spectral import assemble, evaluate
 @njit(**JIT_FLAGS)
 def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
             coefficients, context, drive_coefficients, mobility, bot_mobility,
-            n_nodes, membrane):
+            n_nodes, membrane, law):
     n = n_nodes
     spec = np.empty(n, dtype=np.complex128)
     z = np.empty(n, dtype=np.complex128)
@@ -36,6 +39,7 @@ def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
     fhat = np.zeros(modes.size, dtype=np.complex128)
     dpose = np.zeros(3)
     drive_out = np.zeros(3)
+    bot_drag = np.zeros(3)
     weight = 2.0 * math.pi / n
     p = phase_index
     for _ in range(n_steps):
@@ -63,9 +67,20 @@ def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
                 if parts[0, i] != 0.0 or parts[1, i] != 0.0:
                     has_q0 = True
             assemble(q0, q1, q2, has_q0, spec, fhat)
+            if LAW:
+                friction_velocity(fhat, law.vhat, law)
+                for j in range(modes.size):
+                    fhat[j] = law.vhat[j]
         drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)
-        for j in range(3):
-            pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j])
+        if HAS_BOT:
+            bot_drag[:] = 0.0
+            bot_forces(pose, context, coefficients, bot_drag)
+            for j in range(3):
+                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j]
+                                                   - bot_drag[j])
+        else:
+            for j in range(3):
+                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j])
         if membrane:
             for j in range(modes.size):
                 modes[j] += dt * mobility * fhat[j]

@@ -6,7 +6,11 @@ the continuous extension.
 Bound: ``forces_s``, ``jacobian_s`` (the smooth terms on the coarse grid), ``forces_f``,
 ``jacobian_f`` (the other terms on the N points), ``HAS_S``, ``ORDER_S``, ``HAS_F``,
 ``ORDER_F`` (whether each group has terms, and the highest curve derivative it needs),
-``drive``, ``drive_jacobian`` and ``JIT_FLAGS``.
+``drive``, ``drive_jacobian``, ``LAW`` (whether the friction law is nonlinear; then
+``friction_velocity`` and ``friction_jacobian`` are its compiled functions, from
+``core/engine/templates/friction.py``), ``HAS_BOT_S``, ``HAS_BOT_F`` (whether a group has
+energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
+their sums, from :func:`softcell.core.engine.compose.compose_bot`) and ``JIT_FLAGS``.
 """
 # ruff: noqa: F821 (the names above are bound by the loader)
 
@@ -66,8 +70,20 @@ def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobilit
         if HAS_F:
             forces_f(ws.modes, pose, ORDER_F, context, coefficients[1], ws.fine)
             accumulate(ws.fine, mobility, out, drag)
+        if LAW:  # out holds the force modes (mobility 1): move by the law's velocity
+            lw = ws.law
+            for j in range(m):
+                lw.fhat[j] = complex(out[j], out[m + j])
+            friction_velocity(lw.fhat, lw.vhat, lw)
+            for j in range(m):
+                out[j] = lw.vhat[j].real
+                out[m + j] = lw.vhat[j].imag
     else:
         out[:2 * m] = 0.0
+    if HAS_BOT_S:
+        bot_forces_s(pose, context, coefficients[0], drag)
+    if HAS_BOT_F:
+        bot_forces_f(pose, context, coefficients[1], drag)
     drive(phase, datum, pose, context, drive_coefficients, ws.drv)
     for c in range(3):
         out[2 * m + c] = bot_mobility[c] * (ws.drv[c] - drag[c])
@@ -76,7 +92,8 @@ def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobilit
 @njit(**JIT_FLAGS)
 def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
              bot_mobility, membrane, ws):
-    """The Jacobian at u into ``ws.jac``; the grids' ``w`` must hold the curves at u."""
+    """The Jacobian at u into ``ws.jac``; the grids' ``w`` (and, with a nonlinear friction
+    law, ``ws.law``) must hold what :func:`rhs` left there at u."""
     m = ws.modes.size
     pose = u[2 * m:]
     ws.jac[:, :] = 0.0
@@ -85,11 +102,25 @@ def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobilit
             jacobian_s(pose, context, coefficients[0], mobility, bot_mobility, ws.smooth, ws)
         if HAS_F:
             jacobian_f(pose, context, coefficients[1], mobility, bot_mobility, ws.fine, ws)
+        if LAW:
+            friction_jacobian(ws.jac, ws.law)
     drive_jacobian(phase, datum, pose, context, drive_coefficients, ws.steps, ws.pose_tmp,
                    ws.drv_plus, ws.drv_minus, ws.djac)
     for c in range(3):
         for d in range(3):
             ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
+    if HAS_BOT_S or HAS_BOT_F:
+        hpp = ws.bot_hpp
+        hpp[:, :] = 0.0
+        if HAS_BOT_S:
+            bot_hessians_s(pose, context, coefficients[0], ws.steps, ws.pose_tmp, ws.dplus,
+                           ws.dminus, hpp)
+        if HAS_BOT_F:
+            bot_hessians_f(pose, context, coefficients[1], ws.steps, ws.pose_tmp, ws.dplus,
+                           ws.dminus, hpp)
+        for c in range(3):
+            for d in range(3):
+                ws.jac[2 * m + c, 2 * m + d] -= bot_mobility[c] * hpp[c, d]
 
 
 @njit(**JIT_FLAGS)

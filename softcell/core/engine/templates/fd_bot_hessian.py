@@ -1,0 +1,24 @@
+"""The fallback for a bot energy without analytic second derivatives: central differences of
+its kernel (see :func:`softcell.core.engine.compose.compose_bot`).
+
+Bound: ``bot`` (the term's bot kernel), ``JIT_FLAGS``. Steps ``steps[6:9]`` (cm, cm, rad); the
+result is *added* to ``hpp``.
+"""
+# ruff: noqa: F821 (bot and JIT_FLAGS are bound by the loader)
+
+from numba import njit
+
+
+@njit(**JIT_FLAGS)
+def fd_bot_hessian(pose, context, coefficients, steps, pose_tmp, plus, minus, hpp):
+    for d in range(3):
+        h = steps[6 + d]
+        pose_tmp[:] = pose
+        pose_tmp[d] = pose[d] + h
+        plus[:] = 0.0
+        bot(pose_tmp, context, coefficients, plus)
+        pose_tmp[d] = pose[d] - h
+        minus[:] = 0.0
+        bot(pose_tmp, context, coefficients, minus)
+        for c in range(3):
+            hpp[c, d] += (plus[c] - minus[c]) * (0.5 / h)

@@ -1,0 +1,66 @@
+"""A nonlinear friction law applied between the force modes and the velocity modes, compiled
+per law by :func:`softcell.core.engine.friction.compiled_friction`.
+
+Bound: ``law_velocity`` (the law's velocity kernel), ``ANALYTIC`` (whether ``law_derivative``,
+the law's derivative kernel, is bound; otherwise central differences of ``law_velocity``) and
+``JIT_FLAGS``. ``lw`` is the workspace of :func:`softcell.core.engine.friction.workspace`.
+"""
+# ruff: noqa: F821 (the names above are bound by the loader)
+
+from numba import njit
+
+from softcell.kernels.friction import apply_to_rows, force_field, law_matrix, velocity_modes
+
+
+@njit(**JIT_FLAGS)
+def velocity(fhat, vhat, lw):
+    """vhat (cm s^-1): the velocity modes |k| <= Lc under the force modes ``fhat`` (N per unit
+    xi); leaves the force density in ``lw.fx, lw.fy`` for :func:`jacobian`."""
+    force_field(fhat, lw.scale[0], lw.spec, lw.field, lw.fx, lw.fy)
+    law_velocity(lw.fx, lw.fy, lw.coefficients, lw.vx, lw.vy)
+    velocity_modes(lw.vx, lw.vy, lw.spec, lw.field, vhat)
+
+
+@njit(**JIT_FLAGS)
+def derivative(lw):
+    coefficients = lw.coefficients
+    """d v / d f at the force density in ``lw.fx, lw.fy`` into ``lw.dxx ... lw.dyy``."""
+    if ANALYTIC:
+        law_derivative(lw.fx, lw.fy, coefficients, lw.dxx, lw.dxy, lw.dyx, lw.dyy)
+        return
+    n = lw.fx.size
+    for axis in range(2):
+        for sign in range(2):
+            for i in range(n):
+                lw.fx_step[i] = lw.fx[i]
+                lw.fy_step[i] = lw.fy[i]
+                if axis == 0:
+                    h = 1e-6 * (abs(lw.fx[i]) + 1e-8)
+                    lw.fx_step[i] += h if sign == 0 else -h
+                else:
+                    h = 1e-6 * (abs(lw.fy[i]) + 1e-8)
+                    lw.fy_step[i] += h if sign == 0 else -h
+            if sign == 0:
+                law_velocity(lw.fx_step, lw.fy_step, coefficients, lw.vx_plus, lw.vy_plus)
+            else:
+                law_velocity(lw.fx_step, lw.fy_step, coefficients, lw.vx, lw.vy)
+        for i in range(n):
+            f = lw.fx[i] if axis == 0 else lw.fy[i]
+            inv = 0.5 / (1e-6 * (abs(f) + 1e-8))
+            if axis == 0:
+                lw.dxx[i] = (lw.vx_plus[i] - lw.vx[i]) * inv
+                lw.dyx[i] = (lw.vy_plus[i] - lw.vy[i]) * inv
+            else:
+                lw.dxy[i] = (lw.vx_plus[i] - lw.vx[i]) * inv
+                lw.dyy[i] = (lw.vy_plus[i] - lw.vy[i]) * inv
+
+
+@njit(**JIT_FLAGS)
+def jacobian(jac, lw):
+    """The force modes' rows of ``jac`` (d f_hat / d u, at the state whose force density
+    :func:`velocity` left in ``lw``) become the velocity modes' rows."""
+    lc = (lw.vhat.size - 1) // 2
+    derivative(lw)
+    law_matrix(lw.dxx, lw.dxy, lw.dyx, lw.dyy, lw.scale[0], lc, lw.buf, lw.spec, lw.a_hat,
+               lw.b_hat, lw.law)
+    apply_to_rows(lw.law, jac, lw.rows)
