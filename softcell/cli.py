@@ -286,6 +286,26 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_beyond(args: argparse.Namespace) -> int:
+    from softcell.workflows.beyond import beyond
+
+    report = beyond(args.output, seed=args.seed, workers=args.workers,
+                    overwrite=args.overwrite, progress=not args.quiet, log=_note)
+    print(f"done: {report}")
+    return 0
+
+
+def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="results directory (one reproduction per variant inside)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="recompute what the directory holds from another seed or version")
+    p.add_argument("--seed", type=int, default=0, help="root seed of every variant")
+    p.add_argument("--workers", type=int, help="local worker processes (default: every core)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_beyond)
+
+
 def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, help=workers_help)
@@ -478,6 +498,8 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
                 _add_figures),
     "reproduce": ("the paper end to end: simulate, analyze, render and track, figures, report",
                   _add_reproduce),
+    "beyond": ("the quick design with static friction (3 thresholds) and in the arena, beside "
+               "the paper's model", _add_beyond),
     "cache": ("the compiled-model cache: where it is, what it holds; 'cache clear' empties it",
               _add_cache),
 }

@@ -1,9 +1,9 @@
 """A nonlinear friction law between the force modes and the velocity modes (docs/model.md §3).
 
 The force modes f_hat_k (|k| <= Lc, N per unit xi) give the force density on the membrane at
-the N points, f(xi_n) = s sum_k f_hat_k e^{i k xi_n} with s = 2 pi / l0 (N cm^-1); the law's
+M points, f(xi_n) = s sum_k f_hat_k e^{i k xi_n} with s = 2 pi / l0 (N cm^-1); the law's
 kernel maps it to the velocity v(xi_n) (cm s^-1); the velocity's modes |k| <= Lc,
-v_hat_k = N^-1 sum_n v(xi_n) e^{-i k xi_n}, are dg_k / dt.
+v_hat_k = M^-1 sum_n v(xi_n) e^{-i k xi_n}, are dg_k / dt.
 
 Linearised, delta v = D delta f with D the law's 2 x 2 derivative at each point. In complex
 form delta v = A delta f + B conj(delta f), A = (D_xx + D_yy) / 2 + i (D_yx - D_xy) / 2,
@@ -26,8 +26,8 @@ from softcell.kernels.spectral import AXES
 
 @njit(**JIT)
 def force_field(fhat, scale, spec, field, fx, fy):
-    """fx, fy (float64[N], N cm^-1): the force density of the modes ``fhat``
-    (complex128[2 Lc + 1], N per unit xi) at the N points; ``spec, field`` complex128[N]
+    """fx, fy (float64[M], N cm^-1): the force density of the modes ``fhat``
+    (complex128[2 Lc + 1], N per unit xi) at the M points; ``spec, field`` complex128[M]
     scratch."""
     n = fx.size
     lc = (fhat.size - 1) // 2
@@ -56,8 +56,8 @@ def velocity_modes(vx, vy, spec, field, vhat):
 @njit(**JIT)
 def law_matrix(dxx, dxy, dyx, dyy, scale, lc, buf, spec, a_hat, b_hat, out):
     """``out`` (float64[2 m, 2 m], m = 2 Lc + 1): d (Re v_hat, Im v_hat) / d (Re f_hat,
-    Im f_hat) for the law's derivative ``dab`` (float64[N], cm^2 N^-1 s^-1) at the N points.
-    ``buf, spec`` complex128[N] and ``a_hat, b_hat`` complex128[4 Lc + 1] are scratch."""
+    Im f_hat) for the law's derivative ``dab`` (float64[M], cm^2 N^-1 s^-1) at the M points.
+    ``buf, spec`` complex128[M] and ``a_hat, b_hat`` complex128[4 Lc + 1] are scratch."""
     n = dxx.size
     m = 2 * lc + 1
     for part in range(2):

@@ -51,8 +51,9 @@ class Model:
     friction : FrictionLaw
         The membrane's friction law; ``friction_coefficients`` its coefficients. When it is
         not ``linear``, an integrator evaluates the force density
-        f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at the N points, applies the law's
-        kernel there and moves the modes by the velocity's modes |k| <= Lc
+        f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at M points (the smallest power of
+        two >= 8 Lc, at most N: 128), applies the law's kernel there and moves the modes by the
+        velocity's modes |k| <= Lc
         (``force_scale`` = 2 pi / l0, cm^-1).
     """
 

@@ -260,8 +260,9 @@ class DrivingProtocol(Component):
 class FrictionLaw(Component):
     """How a membrane element moves under the force on it: a pointwise map from the force
     density f (N cm^-1, per unit length of membrane) to the element's velocity v (cm s^-1)
-    (docs/model.md §3). The engine evaluates the force density of the cut-off modes at the N
-    collocation points, applies the law there, and keeps the velocity's modes |k| <= Lc, so
+    (docs/model.md §3). The engine evaluates the force density of the cut-off modes at M
+    equally spaced points (the smallest power of two >= 8 Lc, at most N: 128 with the
+    defaults), applies the law there, and keeps the velocity's modes |k| <= Lc, so
     the shape stays band-limited whatever the law.
 
     The built-in ``viscous`` law, v = f / gamma_mem, is the paper's; it is ``linear``, and
@@ -285,9 +286,9 @@ class FrictionLaw(Component):
 
             kernel(fx, fy, coefficients, vx, vy) -> None
 
-        ``fx, fy``: float64[N], the force density on the membrane at the N points (N cm^-1);
+        ``fx, fy``: float64[M], the force density on the membrane at the M points (N cm^-1);
         ``coefficients``: float64[:], from :meth:`coefficients`. The kernel writes the
-        velocity (cm s^-1) into ``vx, vy`` (float64[N]). It must not allocate.
+        velocity (cm s^-1) into ``vx, vy`` (float64[M]). It must not allocate.
         """
 
     def derivative_kernel(self) -> Callable[..., None] | None:
@@ -298,7 +299,7 @@ class FrictionLaw(Component):
             kernel(fx, fy, coefficients, dxx, dxy, dyx, dyy) -> None
 
         Arrays as in :meth:`velocity_kernel`; the kernel writes d v_a / d f_b
-        (cm^2 N^-1 s^-1) into ``dab`` (float64[N]) for a, b in x, y. Linearly implicit
+        (cm^2 N^-1 s^-1) into ``dab`` (float64[M]) for a, b in x, y. Linearly implicit
         integrators (``rodas4``) need it for their Jacobian. The default, None, selects the
         documented fallback: central differences of :meth:`velocity_kernel` with the step
         ``1e-6 (|f| + 1e-8 N/cm)`` per component.

@@ -1,0 +1,42 @@
+"""softcell beyond: the variants run side by side and their comparison."""
+
+import json
+
+import numpy as np
+import pytest
+
+from softcell.workflows.beyond import VARIANTS, Variant, beyond
+from softcell.workflows.reproduce import Design, VideoDesign
+
+TINY = Design("tiny", radii=(4.0, 12.0), realizations=1, duration=20.0, discard=5.0,
+              free_bot_realizations=1, video=VideoDesign(radius=12.0, span=3.0))
+
+
+def test_the_variants_are_the_studys():
+    names = [v.name for v in VARIANTS]
+    assert names == ["viscous", "coulomb_3e-05", "coulomb_0.0001", "coulomb_0.0003", "arena"]
+    design = VARIANTS[2].design(TINY)
+    assert design.components["friction_law"] == "coulomb"
+    assert design.parameters == {"membrane_static_friction": 1e-4,
+                                 "static_friction_width": 1e-5}
+    assert "arena" in VARIANTS[4].design(TINY).components["energy_terms"]
+
+
+@pytest.mark.slow
+def test_beyond_compares_the_variants_on_common_random_numbers(tmp_path):
+    variants = (VARIANTS[0], Variant("coulomb_0", "coulomb, f_s = 0",
+                                     {"friction_law": "coulomb"},
+                                     {"membrane_static_friction": 0.0}), VARIANTS[4])
+    report = beyond(tmp_path, seed=3, workers=1, variants=variants, base=TINY,
+                    progress=False, log=None)
+    text = report.read_text()
+    assert "| finding |" in text and "coulomb, f_s = 0" in text
+    assert (tmp_path / "figures" / "friction.png").exists()
+    assert (tmp_path / "figures" / "arena.png").exists()
+    results = json.loads((tmp_path / "beyond.json").read_text())
+    # f_s = 0 is the viscous law to rounding, and both ran on the same random numbers (the
+    # adaptive steps may part at the tolerance, ~1e-5 cm, so compare at that level)
+    viscous, zero = results["viscous"], results["coulomb_0"]
+    assert np.allclose(viscous["ipr_mean"], zero["ipr_mean"], rtol=1e-5)
+    # the free bot of the arena variant ran inside the walls; the others on the open floor
+    assert results["arena"]["free_renewal_d"] == pytest.approx(viscous["free_renewal_d"])
