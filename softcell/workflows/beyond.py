@@ -10,8 +10,10 @@ that differences are not noise) is run with
   inside the same walls;
 
 each into its own folder by :func:`softcell.workflows.reproduce.reproduce` (resumable, with its
-own report), and :func:`summarize` sets them side by side against the paper's claims:
-``beyond.md``, ``beyond.json`` and figures.
+own report). The quick design's free bot (240 s) hardly sees a 1 m arena's walls, so the free
+bot also runs long (:data:`FREE_LONG`: 10 realizations of 1800 s) on the open floor and in the
+arena (``free_bot_long/``). :func:`summarize` sets everything side by side against the paper's
+claims: ``beyond.md``, ``beyond.json`` and figures.
 """
 
 from __future__ import annotations
@@ -60,9 +62,35 @@ VARIANTS: tuple[Variant, ...] = (
 )
 
 
+#: The long free-bot runs: realizations and duration (s).
+FREE_LONG = (10, 1800.0)
+#: Their two settings: the open floor and the paper's 1 m arena.
+FREE_SETTINGS = {"open": ([], {}), "arena": (["arena"], {"arena_side": 100.0})}
+
+
+def _free_long(out: Path, seed: int, workers: int | None, overwrite: bool, progress: bool,
+               log) -> None:
+    from softcell.core.analysis import analyze
+    from softcell.core.runconfig import RunConfig
+    from softcell.io.netcdf import open_dataset, write_dataset
+    from softcell.workflows.ensemble import simulate
+
+    realizations, duration = FREE_LONG
+    for name, (terms, values) in FREE_SETTINGS.items():
+        folder = out / "free_bot_long" / name
+        config = RunConfig(parameters={"radius": QUICK.radii[0], "duration": duration,
+                                       **values}).updated(
+            components={**DEFAULT_COMPONENTS, "energy_terms": terms})
+        simulate(config, folder, realizations=realizations, seed=seed,
+                 workers=workers or len(os.sched_getaffinity(0)), membrane=False,
+                 progress=progress, overwrite=overwrite, log=log)
+        analysis = analyze(open_dataset(folder), {"discard": QUICK.discard})
+        write_dataset(analysis, folder.parent / f"{name}_analysis.nc")
+
+
 def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = None,
            variants: tuple[Variant, ...] = VARIANTS, base: Design = QUICK,
-           overwrite: bool = False, progress: bool = True,
+           overwrite: bool = False, progress: bool = True, long_free_bot: bool = True,
            log: Callable[[str], None] | None = print) -> Path:
     """Run every variant of ``base`` into ``out/<variant>`` and write the comparison.
 
@@ -75,6 +103,9 @@ def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = 
         One root seed for every variant (common random numbers).
     workers : int, optional
         Local worker processes (default: every core).
+    long_free_bot : bool
+        Also run the long free-bot ensembles (:data:`FREE_LONG`) on the open floor and in
+        the arena.
 
     Returns
     -------
@@ -87,6 +118,10 @@ def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = 
         say(f"variant {i + 1}/{len(variants)}: {variant.label}")
         reproduce(out / variant.name, variant.design(base), seed=seed, workers=workers,
                   overwrite=overwrite, progress=progress, log=log)
+    if long_free_bot:
+        say(f"the free bot, {FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s, on the open "
+            "floor and in the arena")
+        _free_long(out, seed, workers, overwrite, progress, log)
     return summarize(out, variants)
 
 
@@ -135,7 +170,7 @@ def measure(folder: Path) -> dict[str, Any]:
         "ipr_excess_stop": stop_excess.tolist(),
         "ipr_excess_go": go_excess.tolist(),
         "regime": [int(g) for g in analysis["regime"].values],
-        "verdicts": {f["name"]: f["verdict"] for f in findings},
+        "verdicts": {f["topic"]: f["verdict"] for f in findings},
         "free_lag": [float(t) for t in free["lag"].values],
         "free_msd": [float(v) for v in np.asarray(free_msd.values)],
         "free_confined_d": float(np.ravel(confined.values)[0]),
@@ -143,12 +178,29 @@ def measure(folder: Path) -> dict[str, Any]:
     }
 
 
+def _free_measure(path: Path) -> dict[str, Any]:
+    from softcell.io.netcdf import read_dataset
+
+    free = read_dataset(path)
+    msd = free["msd"].sel(body="bot")
+    msd = msd.isel({d: 0 for d in msd.dims if d != "lag"})
+    confined = free["confined_diffusion_coefficient"].sel(body="bot")
+    return {"lag": [float(t) for t in free["lag"].values],
+            "msd": [float(v) for v in np.asarray(msd.values)],
+            "confined_d": float(np.ravel(confined.values)[0])}
+
+
 def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIANTS) -> Path:
     """``beyond.md``, ``beyond.json`` and ``figures/`` in ``out`` from the variants' folders."""
     from softcell.io.files import atomic_write
 
     out = Path(out)
-    results = {v.name: measure(out / v.name) for v in variants}
+    results: dict[str, Any] = {v.name: measure(out / v.name) for v in variants}
+    long = {name: _free_measure(out / "free_bot_long" / f"{name}_analysis.nc")
+            for name in FREE_SETTINGS
+            if (out / "free_bot_long" / f"{name}_analysis.nc").exists()}
+    if long:
+        results["free_bot_long"] = long
     with atomic_write(out / "beyond.json") as tmp:
         tmp.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
     figures = _figures(out / "figures", variants, results)
@@ -181,25 +233,36 @@ def _figures(folder: Path, variants, results) -> list[str]:
 
     from softcell.core.analysis.fits import confined_square_msd
 
-    fig, ax = plt.subplots(figsize=(5.5, 4), constrained_layout=True)
-    for name in ("viscous", "arena"):
-        if name not in results:
-            continue
-        r = results[name]
-        lag = np.asarray(r["free_lag"])
-        ax.loglog(lag, r["free_msd"], label=f"free bot, {name}")
-    if "arena" in results:
-        r = results["arena"]
-        lag = np.asarray(r["free_lag"])
-        ax.loglog(lag, confined_square_msd(lag, r["free_confined_d"], 100.0), "k--",
-                  label=f"confined fit, D = {r['free_confined_d']:.1f} cm2/s")
-        ax.loglog(lag, confined_square_msd(lag, r["free_renewal_d"], 100.0), "k:",
-                  label=f"confined formula at the renewal D = {r['free_renewal_d']:.2f}")
+    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    renewal = results[variants[0].name]["free_renewal_d"]
+    long = results.get("free_bot_long", {})
+    for name, r in long.items():
+        ax.loglog(r["lag"], r["msd"], label=f"free bot, {name} ({FREE_LONG[1]:g} s runs)")
+    if "arena" in long:
+        lag = np.asarray(long["arena"]["lag"])
+        d = long["arena"]["confined_d"]
+        ax.loglog(lag, confined_square_msd(lag, d, 100.0), "k--",
+                  label=f"confined fit, D = {d:.1f} cm2/s")
+        ax.loglog(lag, confined_square_msd(lag, renewal, 100.0), "k:",
+                  label=f"confined formula at the renewal D = {renewal:.2f}")
+        ax.axhline(100.0 ** 2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
     ax.set(xlabel="lag (s)", ylabel="MSD (cm2)", title="free bot: open floor and 1 m arena")
     ax.legend(fontsize=7)
     fig.savefig(folder / "arena.png", dpi=120)
     plt.close(fig)
     return ["friction.png", "arena.png"]
+
+
+def claims(reference: dict[str, Any], variant: dict[str, Any]) -> dict[str, float]:
+    """A variant against the reference, on the paper's three static-friction claims: the
+    median over R of the ratio of the IPR excess during stops, the mean ratio of <tau_s> over
+    R >= 10 cm, the median ratio of <tau_g>."""
+    radius = np.asarray(reference["radius"])
+    ratio = {k: np.asarray(variant[k]) / np.asarray(reference[k])
+             for k in ("ipr_excess_stop", "mean_stop_duration", "mean_go_duration")}
+    return {"stop_shape": float(np.nanmedian(ratio["ipr_excess_stop"])),
+            "stop_large": float(np.nanmean(ratio["mean_stop_duration"][radius >= 10])),
+            "go": float(np.nanmedian(ratio["mean_go_duration"]))}
 
 
 def _row(cells) -> str:
@@ -239,13 +302,30 @@ def _markdown(variants, results, figures) -> str:
         r = results[v.name]
         lines.append(_row([v.label, _fmt(r["mean_stop_duration"]), _fmt(r["mean_go_duration"]),
                            _fmt(r["ipr_excess_stop"], 2), _fmt(r["ipr_excess_go"], 2)]))
-    lines += ["", *[f"![{f}](figures/{f})" for f in figures], ""]
-    if "arena" in results:
-        r = results["arena"]
-        free = results[variants[0].name]
+    lines += ["", "Against the paper's model (ratios to `viscous`, same seed):", "",
+              _row(["variant", "IPR excess during stops (median over R)",
+                    "<tau_s> at R >= 10 cm (mean)", "<tau_g> (median over R)"]),
+              _row(["---"] * 4)]
+    for v in variants[1:]:
+        c = claims(base, results[v.name])
+        lines.append(_row([v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}",
+                           f"{c['go']:.3g}"]))
+    lines += ["", "The paper's claims, read from these columns: static friction keeps the shape "
+              "during stops (first column > 1), lengthens <tau_s> at large R (second > 1) and "
+              "shortens the go phases (third < 1).", "",
+              *[f"![{f}](figures/{f})" for f in figures], ""]
+    long = results.get("free_bot_long", {})
+    if long:
+        renewal = base["free_renewal_d"]
         lines += ["## The free bot in the arena", "",
-                  f"Renewal D of the free bot: {r['free_renewal_d']:.2f} cm2/s. Confined-square "
-                  f"fit (L = 100 cm) to the free bot's MSD: {r['free_confined_d']:.2f} cm2/s "
-                  f"inside the arena, {free['free_confined_d']:.2f} cm2/s on the open floor.",
-                  ""]
+                  f"{FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s of the free bot (rotation "
+                  f"about its centre), whose renewal D is {renewal:.2f} cm2/s; the "
+                  "confined-square formula (L = 100 cm) fitted to its MSD:", "",
+                  _row(["floor", "confined-fit D (cm2/s)", "fit / renewal",
+                        "MSD at the longest lag (cm2)"]), _row(["---"] * 4)]
+        for name, r in long.items():
+            lines.append(_row([name, f"{r['confined_d']:.2f}",
+                               f"{r['confined_d'] / renewal:.2f}", f"{r['msd'][-1]:.0f}"]))
+        lines += ["", f"L^2 / 3 = {100.0 ** 2 / 3:.0f} cm2 is where the MSD saturates in the "
+                  "arena.", ""]
     return "\n".join(lines) + "\n"
