@@ -8,6 +8,10 @@ ensemble's efficiency on local workers, and the paper's full design as measured.
   in this process and on ``CORES`` local dask workers, side by side, sampling, files and dask
   included, the compiled model warm in the cache; efficiency = rate on N workers / (N x the
   single-process rate), target 0.9.
+- Where the rest goes: the machine's own ceiling, the same realizations run as ``CORES``
+  plain processes at once (one BLAS/OpenMP thread each, as dask's workers have) against one
+  alone, no dask, no cluster; what the ensemble loses beyond that ceiling is dask's (cluster
+  start, worker imports and cache loads, the tail).
 - The full design as run by ``softcell reproduce --full`` (``docs/results/full/timing.json``,
   written by the documented command there), beside its projection.
 
@@ -18,6 +22,8 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -39,6 +45,42 @@ def ensemble_rate(out: Path, workers: int) -> float:
              progress=False)
     wall = time.perf_counter() - start
     return len(ENSEMBLE["radius"]) * ENSEMBLE_REALIZATIONS * ENSEMBLE["duration"] / wall
+
+
+# One process's share of the ceiling measurement: warm, then time a few realizations.
+PLAIN = """
+import sys, time
+from pathlib import Path
+from softcell.core.runconfig import RunConfig
+from softcell.workflows.ensemble import simulate
+out = Path(sys.argv[1])
+simulate(RunConfig(parameters={"radius": 9.0, "duration": 0.1}), out / "warm", progress=False)
+start = time.perf_counter()
+simulate(RunConfig(parameters={"radius": 9.0, "duration": 240.0}), out / "run",
+         realizations=2, progress=False)
+print(time.perf_counter() - start)
+"""
+
+
+def plain_processes(tmp: Path, count: int) -> float:
+    """Wall time (s) of the slowest of ``count`` processes started at once, each running the
+    same two realizations with one BLAS/OpenMP thread."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
+               MKL_NUM_THREADS="1")
+    runs = [subprocess.Popen([sys.executable, "-c", PLAIN, str(tmp / f"plain{count}-{k}")],
+                             stdout=subprocess.PIPE, text=True, env=env)
+            for k in range(count)]
+    return max(float(r.communicate()[0].split()[-1]) for r in runs)
+
+
+def ceiling_rows(tmp: Path) -> list[dict[str, object]]:
+    alone = [plain_processes(tmp / f"a{k}", 1) for k in range(3)]
+    together = [plain_processes(tmp / f"t{k}", CORES) for k in range(3)]
+    ceiling = sorted(alone)[1] / sorted(together)[1]
+    return [{"benchmark": f"machine ceiling, {CORES} plain processes", "value": ceiling,
+             "unit": "1", "target": None,
+             "note": f"median of 3: one alone {sorted(alone)[1]:.2f} s, {CORES} at once "
+                     f"{sorted(together)[1]:.2f} s (R = 9 cm, 2 x 240 s, no dask)"}]
 
 
 def ensemble_rows(tmp: Path) -> list[dict[str, object]]:
@@ -78,7 +120,7 @@ def rows() -> list[dict[str, object]]:
     from softcell.workflows.reproduce import QUICK, reproduce
 
     with tempfile.TemporaryDirectory() as tmp:
-        out = ensemble_rows(Path(tmp))
+        out = ensemble_rows(Path(tmp)) + ceiling_rows(Path(tmp))
         start = time.perf_counter()
         outcome = reproduce(Path(tmp) / "quick", QUICK, progress=False, log=None)
         total = time.perf_counter() - start

@@ -116,6 +116,21 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     assert not list(tmp_path.glob("*.nc"))
 
 
+@pytest.mark.parametrize("cutoff, points", [(16, 64), (40, 64)])
+def test_blow_up_check_speeds_equal_the_direct_fourier_sum(cutoff, points):
+    from softcell.core.engine.state import _speeds
+
+    rng = np.random.default_rng(3)
+    modes = rng.normal(size=(4, 2 * cutoff + 1)) + 1j * rng.normal(size=(4, 2 * cutoff + 1))
+    k = np.arange(-cutoff, cutoff + 1)
+    xi = 2 * np.pi * np.arange(points) / points
+    direct = np.abs(np.exp(1j * np.outer(xi, k)) @ (1j * k * modes).T).T  # aliased too
+    assert np.allclose(_speeds(modes, points), direct, rtol=1e-12, atol=0)
+    circle = np.zeros(2 * cutoff + 1, complex)
+    circle[cutoff + 1] = 7.0  # g_1 = R: a circle of radius 7 cm, length 14 pi
+    assert 2 * np.pi * _speeds(circle, points).mean() == pytest.approx(14 * np.pi, rel=1e-14)
+
+
 def test_unstable_dt_is_refused_with_the_bound():
     params = Parameters({"radius": 4.0, "cutoff": 20, "dt": 1e-6})
     model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
