@@ -7,7 +7,6 @@ from softcell.cli import main
 from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.engine import build_integrator, build_model, fd_hessian, initial_state
 from softcell.core.engine.compose import compose_bot
-from softcell.core.engine.friction import mobility
 from softcell.core.engine.reference import _curve
 from softcell.core.params import Parameters
 from softcell.core.plugin.registry import get_registry
@@ -16,6 +15,7 @@ from softcell.errors import ParameterError
 from softcell.io.netcdf import read_dataset
 from softcell.plugins.arena import arena_bot
 from softcell.plugins.rodas4 import pack
+from softcell.testing.compare import rodas4_jacobians
 
 TERMS = ["bending", "tension", "contact", "arena"]
 
@@ -95,22 +95,7 @@ def test_rodas4_jacobian_with_the_arena_matches_differences():
     modes[lc], modes[lc + 1] = 0.02 - 0.01j, 4.99  # reaching two walls
     u = pack(modes, np.array([1.99 - 0.005 + 0.02, -0.01, 0.0]))  # and the bot's tip in contact
 
-    def rhs(v):
-        out = np.zeros_like(v)
-        stepper.rhs(v, 1, 0.0, out, stepper.coefficients, model.context,
-                    model.drive_coefficients, mobility(model), model.bot_mobility, True,
-                    stepper.ws)
-        return out
-
-    rhs(u)
-    stepper.jacobian(u, 1, 0.0, stepper.coefficients, model.context, model.drive_coefficients,
-                     mobility(model), model.bot_mobility, True, stepper.ws)
-    jac = stepper.ws.jac.copy()
-    diff = np.zeros_like(jac)
-    for j in range(u.size):
-        du = np.zeros_like(u)
-        du[j] = 1e-7
-        diff[:, j] = (rhs(u + du) - rhs(u - du)) / 2e-7
+    jac, diff = rodas4_jacobians(model, stepper, u)
     assert np.abs(jac - diff).max() <= 1e-6 * np.abs(diff).max()
 
 

@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 from numba import njit
 
 from softcell.core.engine import build_integrator, build_model, circle_modes, total_energy
-from softcell.core.engine.friction import mobility
 from softcell.core.params import Parameters
 from softcell.core.plugin.registry import get_registry
 from softcell.plugin import (
@@ -29,6 +28,7 @@ from softcell.plugin import (
 )
 from softcell.plugins.friction import coulomb_derivative, coulomb_velocity
 from softcell.plugins.rodas4 import pack
+from softcell.testing.compare import rodas4_jacobians
 
 GAMMA = float(MODEL_PARAMETERS["membrane_friction"].default)
 
@@ -290,22 +290,7 @@ def test_rodas4_jacobian_with_static_friction_matches_differences(plugin, law):
         1 + np.abs(np.arange(-lc, lc + 1))) ** 2
     u = pack(modes, np.array([4.3 - 3.0 - 0.005, 0.1, 0.2]))
 
-    def rhs(v):
-        out = np.zeros_like(v)
-        stepper.rhs(v, 1, 0.0, out, stepper.coefficients, model.context,
-                    model.drive_coefficients, mobility(model), model.bot_mobility, True,
-                    stepper.ws)
-        return out
-
-    rhs(u)
-    stepper.jacobian(u, 1, 0.0, stepper.coefficients, model.context, model.drive_coefficients,
-                     mobility(model), model.bot_mobility, True, stepper.ws)
-    jac = stepper.ws.jac.copy()
-    diff = np.zeros_like(jac)
-    for j in range(u.size):
-        du = np.zeros_like(u)
-        du[j] = 1e-7
-        diff[:, j] = (rhs(u + du) - rhs(u - du)) / 2e-7
+    jac, diff = rodas4_jacobians(model, stepper, u)
     assert np.abs(jac - diff).max() <= 1e-6 * np.abs(diff).max()
 
 

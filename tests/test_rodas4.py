@@ -22,6 +22,7 @@ from softcell.core.realization import realization_rng
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
 from softcell.testing import registered
+from softcell.testing.compare import rodas4_jacobians, rodas4_rhs
 
 TERMS = ["bending", "tension", "contact"]
 REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"
@@ -46,25 +47,7 @@ def _stepper(params, terms=TERMS):
 
 
 def _rhs(model, stepper, u, phase=1):
-    out = np.zeros_like(u)
-    stepper.rhs(u, phase, 0.0, out, stepper.coefficients, model.context,
-                model.drive_coefficients, model.membrane_mobility, model.bot_mobility, True,
-                stepper.ws)
-    return out
-
-
-def _jacobians(model, stepper, u):
-    """(the integrator's Jacobian, central differences of its right-hand side)."""
-    _rhs(model, stepper, u)
-    stepper.jacobian(u, 1, 0.0, stepper.coefficients, model.context, model.drive_coefficients,
-                     model.membrane_mobility, model.bot_mobility, True, stepper.ws)
-    jac = stepper.ws.jac.copy()
-    diff = np.zeros_like(jac)
-    for j in range(u.size):
-        du = np.zeros_like(u)
-        du[j] = 1e-7
-        diff[:, j] = (_rhs(model, stepper, u + du) - _rhs(model, stepper, u - du)) / 2e-7
-    return jac, diff
+    return rodas4_rhs(model, stepper, u, phase)
 
 
 @pytest.mark.parametrize("name", TERMS)
@@ -96,7 +79,7 @@ def test_analytic_second_derivatives_match_the_fallback(name):
 def test_jacobian_matches_differences_of_the_right_hand_side(radius, contact):
     params, modes, pose = _state(radius, contact)
     model, stepper = _stepper(params)
-    jac, diff = _jacobians(model, stepper, pack(modes, pose))
+    jac, diff = rodas4_jacobians(model, stepper, pack(modes, pose))
     assert np.abs(jac - diff).max() <= 1e-8 * np.abs(diff).max()
     # The bot rows and columns: pose-pose, pose-modes, modes-pose.
     assert np.abs(jac[-3:] - diff[-3:]).max() <= 1e-6 * np.abs(diff[-3:]).max()
@@ -147,7 +130,7 @@ def test_a_term_without_second_derivatives_uses_the_documented_fallback():
         params, modes, pose = _state(4.0, contact=True)
         model, stepper = _stepper(params, ["differential_bending", "tension", "contact"])
         assert DifferentialBending.hessian_kernel(None) is None
-        jac, diff = _jacobians(model, stepper, pack(modes, pose))
+        jac, diff = rodas4_jacobians(model, stepper, pack(modes, pose))
         assert np.abs(jac - diff).max() <= 1e-6 * np.abs(diff).max()
 
 

@@ -117,3 +117,35 @@ def path_difference(a: Record, b: Record, cutoff: int) -> dict[str, float]:
 
 
 __all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference"]
+
+
+def rodas4_rhs(model: Model, stepper, u: np.ndarray, phase: int = RUN) -> np.ndarray:
+    """du/dt of rodas4's compiled right-hand side at the packed state ``u`` (cm, rad) in
+    ``phase``, with the model's friction law; ``stepper`` is the model's rodas4 stepper."""
+    from softcell.core.engine.friction import mobility
+
+    out = np.zeros_like(u)
+    stepper.rhs(u, phase, 0.0, out, stepper.coefficients, model.context,
+                model.drive_coefficients, mobility(model), model.bot_mobility, True,
+                stepper.ws)
+    return out
+
+
+def rodas4_jacobians(model: Model, stepper, u: np.ndarray, phase: int = RUN,
+                     step: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
+    """(rodas4's Jacobian at ``u``, central differences of :func:`rodas4_rhs` with ``step``
+    in every unknown): the two should agree to the differences' truncation error."""
+    from softcell.core.engine.friction import mobility
+
+    rodas4_rhs(model, stepper, u, phase)  # the Jacobian reads what the rhs left at u
+    stepper.jacobian(u, phase, 0.0, stepper.coefficients, model.context,
+                     model.drive_coefficients, mobility(model), model.bot_mobility, True,
+                     stepper.ws)
+    jac = stepper.ws.jac.copy()
+    diff = np.zeros_like(jac)
+    for j in range(u.size):
+        du = np.zeros_like(u)
+        du[j] = step
+        diff[:, j] = (rodas4_rhs(model, stepper, u + du, phase)
+                      - rodas4_rhs(model, stepper, u - du, phase)) / (2 * step)
+    return jac, diff
