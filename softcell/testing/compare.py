@@ -18,6 +18,7 @@ from softcell.core.engine import (
     build_model,
     force_modes,
 )
+from softcell.core.engine.friction import mobility
 from softcell.core.params import Parameters
 from softcell.core.plugin.registry import get_registry
 from softcell.core.realization import run_realization
@@ -116,14 +117,11 @@ def path_difference(a: Record, b: Record, cutoff: int) -> dict[str, float]:
             "heading": float(np.abs(a.pose[:, 2] - b.pose[:, 2]).max())}
 
 
-__all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference"]
 
 
 def rodas4_rhs(model: Model, stepper, u: np.ndarray, phase: int = RUN) -> np.ndarray:
     """du/dt of rodas4's compiled right-hand side at the packed state ``u`` (cm, rad) in
     ``phase``, with the model's friction law; ``stepper`` is the model's rodas4 stepper."""
-    from softcell.core.engine.friction import mobility
-
     out = np.zeros_like(u)
     stepper.rhs(u, phase, 0.0, out, stepper.coefficients, model.context,
                 model.drive_coefficients, mobility(model), model.bot_mobility, True,
@@ -135,8 +133,6 @@ def rodas4_jacobians(model: Model, stepper, u: np.ndarray, phase: int = RUN,
                      step: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
     """(rodas4's Jacobian at ``u``, central differences of :func:`rodas4_rhs` with ``step``
     in every unknown): the two should agree to the differences' truncation error."""
-    from softcell.core.engine.friction import mobility
-
     rodas4_rhs(model, stepper, u, phase)  # the Jacobian reads what the rhs left at u
     stepper.jacobian(u, phase, 0.0, stepper.coefficients, model.context,
                      model.drive_coefficients, mobility(model), model.bot_mobility, True,
@@ -149,3 +145,7 @@ def rodas4_jacobians(model: Model, stepper, u: np.ndarray, phase: int = RUN,
         diff[:, j] = (rodas4_rhs(model, stepper, u + du, phase)
                       - rodas4_rhs(model, stepper, u - du, phase)) / (2 * step)
     return jac, diff
+
+
+__all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference", "rodas4_rhs",
+           "rodas4_jacobians"]
