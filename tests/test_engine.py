@@ -64,6 +64,32 @@ def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
     softcell.validate(ds)
 
 
+def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
+    """Every task goes to dask with its simulated seconds as priority, so a long realization
+    never runs alone at the end (the full design puts its 1800 s radii last)."""
+    from softcell.workflows.ensemble import plan, run_on_cluster
+
+    config = RunConfig(parameters={"radius": [4.0, 12.0], "duration": [2.0, 30.5]})
+    tasks = plan(config, tmp_path, realizations=1, seed=0)
+
+    class Refusing:
+        """A client that records what it is given and then fails the wait."""
+        submitted: list = []
+
+        def submit(self, fn, task, *args, priority=0, **kwargs):
+            self.submitted.append((task.values["duration"], priority))
+            return object()
+
+        def cancel(self, futures):
+            self.cancelled = len(futures)
+
+    client = Refusing()
+    with pytest.raises(ValueError, match="No clients found"):  # dask waits on no client
+        run_on_cluster(tasks, client)
+    assert sorted(client.submitted) == [(2.0, 2), (2.0, 2), (30.5, 31), (30.5, 31)]
+    assert client.cancelled == 4
+
+
 def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]

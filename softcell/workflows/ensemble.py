@@ -491,11 +491,15 @@ def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] 
                    checkpoint_every: float = CHECKPOINT_EVERY) -> list[str]:
     """Run ``tasks`` on a dask.distributed ``client``, one task per realization; each writes
     its own file atomically. ``progress`` is called with a task's simulated seconds when it
-    ends. The first failure cancels what has not started and is raised (finished files stay).
+    ends. The longest tasks start first. The first failure cancels what has not started and
+    is raised (finished files stay).
     """
     from distributed import as_completed
 
-    futures = {client.submit(run_task, task, None, checkpoint_every, True, pure=False): task
+    # Longest first (priority = simulated seconds): a long realization submitted last would
+    # run alone on one worker at the end while the others idle.
+    futures = {client.submit(run_task, task, None, checkpoint_every, True, pure=False,
+                             priority=int(math.ceil(_duration(task)))): task
                for task in tasks}
     paths = []
     try:
