@@ -49,15 +49,27 @@ class Frame:
     x0: float = 0.0
     y0: float = 0.0
 
-    def to_pixels(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Column and row (px, pixel centers at integers) of world points (cm)."""
+    def to_pixels(self, x: np.ndarray, y: np.ndarray, z: float = 0.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """Column and row (px, pixel centers at integers) of world points (cm) (``z`` must
+        be 0: see :meth:`to_world`)."""
+        _flat(z)
         return ((np.asarray(x) - self.x0) * self.px_per_cm - 0.5,
                 self.height - (np.asarray(y) - self.y0) * self.px_per_cm - 0.5)
 
-    def to_world(self, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World points (cm) of column and row coordinates (px)."""
+    def to_world(self, u: np.ndarray, v: np.ndarray, z: float = 0.0
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """World points (cm) of column and row coordinates (px); a linear frame has no
+        parallax to correct, so ``z`` (cm) must be 0."""
+        _flat(z)
         return (self.x0 + (np.asarray(u) + 0.5) / self.px_per_cm,
                 self.y0 + (self.height - np.asarray(v) - 0.5) / self.px_per_cm)
+
+def _flat(z: float) -> None:
+    if z:
+        raise ValueError(f"an object height of {z:g} cm needs a camera model (a plate "
+                         "calibration), not a linear frame")
+
 
 @dataclass
 class TrackResult:
@@ -71,6 +83,7 @@ class TrackResult:
     membrane: list[np.ndarray] = field(default_factory=list)
     flags: list[int] = field(default_factory=list)
     marked: list[bool] = field(default_factory=list)
+    reasons: list[str] = field(default_factory=list)
 
 def _arclength_resample(points: np.ndarray, count: int) -> np.ndarray:
     """``count`` points equally spaced by arclength along a closed polyline [K, 2]."""
@@ -86,30 +99,63 @@ def _start_at_angle_zero(points: np.ndarray, center: np.ndarray) -> np.ndarray:
     angles = np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0])
     return np.roll(points, -int(np.argmin(np.abs(angles))), axis=0)
 
+#: Defaults of the adaptive detection (each can be set): a pixel is paper when its redness
+#: (R - max(G, B)) / R exceeds RING_FRACTION of the frame's paper redness, and bot when its
+#: grey level is below DARK_FRACTION of the plate's inside the ring (shadows of 15-35 % are
+#: not: they keep 65-85 % of it).
+RING_FRACTION = 0.45
+DARK_FRACTION = 0.5
+#: Plausibility of a membrane: perimeter within this fraction of the expected 2 pi R, and
+#: for a gapped wall, the share of directions around the GC where the wall is seen.
+PERIMETER_TOLERANCE = 0.1
+MIN_COVERAGE = 0.5
+#: Fourier modes of the shape prior that bridges the gaps of a wall seen edge-on.
+PRIOR_MODES = 6
+ANGLE_BINS = 180
+
+
 class Tracker:
-    """The paper's tracker, one frame at a time (state: the previous heading).
+    """The tracker, one frame at a time (state: the previous heading, GC and perimeter).
 
     Parameters
     ----------
-    frame : Frame
-        Pixel geometry (scale and world origin).
+    frame : Frame or PlateCamera
+        Pixel to world geometry: ``to_world(u, v, z)`` and ``to_pixels(x, y, z)`` (px, cm).
     nodes : int
         Membrane points resampled by arclength.
+    ring_z, bot_z : float
+        Heights (cm) at which the membrane's midline and the bot's outline are mapped (half
+        the ring's and the bot's height: what the camera sees of each spans their height).
+    radius : float, optional
+        Expected membrane radius (cm); default learned from the closed rings seen.
+    ring_threshold : float, optional
+        Redness (R - max(G, B)) / R above which a pixel is paper; default per frame,
+        :data:`RING_FRACTION` of the paper's redness.
+    dark_fraction : float
+        A pixel is bot when darker than this fraction of the plate inside the ring.
     """
 
-    def __init__(self, frame: Frame, nodes: int = 64) -> None:
+    def __init__(self, frame, nodes: int = 64, *, ring_z: float = 0.0, bot_z: float = 0.0,
+                 radius: float | None = None, ring_threshold: float | None = None,
+                 dark_fraction: float = DARK_FRACTION) -> None:
         self.frame = frame
         self.nodes = nodes
+        self.ring_z, self.bot_z = float(ring_z), float(bot_z)
+        self.radius = radius
+        self.ring_threshold = ring_threshold
+        self.dark_fraction = dark_fraction
         self.heading: float | None = None
-        self.band_level: float | None = None
-        self.dark_level: float | None = None
+        self.perimeters: list[float] = []  # of closed rings seen, when no radius is given
         self.window: tuple[int, int, int, int] | None = None  # x0, y0, x1, y1 (px)
         self.mark_seen = False  # whether the last frame's head mark fixed the direction
+        self.reason = ""  # why the last frame failed, "" when it did not
+        self.gc: np.ndarray | None = None
 
     def track(self, image: np.ndarray) -> tuple[int, tuple[float, float], np.ndarray,
                                                 tuple[float, float, float]]:
         """Track one BGR uint8 frame: (flag, cell GC (cm), membrane nodes [nodes, 2] (cm),
-        bot (x cm, y cm, heading rad)); NaN where detection failed.
+        bot (x cm, y cm, heading rad)); NaN where detection failed, and :attr:`reason` says
+        why.
 
         After a success only a window around the last membrane is searched; the whole frame
         is searched again when the membrane is not found well inside that window."""
@@ -135,67 +181,156 @@ class Tracker:
         self.window = (max(x0 - margin, 0), max(y0 - margin, 0), min(x1 + margin, width),
                        min(y1 + margin, height))
 
-    def _detect(self, image: np.ndarray, ox: int, oy: int):
-        """Detect in a sub-image whose top-left pixel is (ox, oy) of the frame; returns the
-        result and the membrane's bounding box (x0, y0, x1, y1) in frame pixels, or None."""
-        nan2 = (np.nan, np.nan)
-        lost = (FLAGS["both_lost"], nan2, np.full((self.nodes, 2), np.nan), (np.nan,) * 3)
-        b, g, r = cv2.split(image)
-        redness = cv2.subtract(r, cv2.max(g, b))  # saturates at 0
-        if self.band_level is None:
-            level, _ = cv2.threshold(redness, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-            self.band_level = max(float(level), 20.0)
-        band = (redness > self.band_level).astype(np.uint8)
+    @property
+    def expected_perimeter(self) -> float | None:
+        if self.radius is not None:
+            return 2 * np.pi * self.radius
+        return float(np.median(self.perimeters[-50:])) if self.perimeters else None
+
+    def _paper(self, image: np.ndarray) -> np.ndarray:
+        """Paper mask of a BGR image: redness above this frame's threshold."""
+        b, g, r = (c.astype(np.float32) for c in cv2.split(cv2.medianBlur(image, 3)))
+        bright = r >= 0.25 * float(np.percentile(r, 90))  # dark pixels have no colour
+        redness = np.where(bright, (r - np.maximum(g, b)) / np.maximum(r, 1.0), 0.0)
+        level = self.ring_threshold
+        if level is None:
+            paper = redness[redness > 0.3]
+            level = RING_FRACTION * float(np.median(paper)) if paper.size >= 30 else 0.3
+            level = max(level, 0.15)
+        return (redness > level).astype(np.uint8)
+
+    def _closed_ring(self, band: np.ndarray, offset: np.ndarray):
+        """(outer, inner) edge contours (px) of the largest closed band, or a reason."""
         contours, hierarchy = cv2.findContours(band, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
         if not contours:
-            return lost, None
+            return None, "no paper seen"
         areas = [cv2.contourArea(c) if hierarchy[0][k][3] < 0 else -1.0
                  for k, c in enumerate(contours)]
         outer_k = int(np.argmax(areas))
         holes = [k for k in range(len(contours)) if hierarchy[0][k][3] == outer_k]
         if areas[outer_k] <= 0 or not holes:
-            return lost, None
+            return None, "the wall is not closed"
         inner_k = max(holes, key=lambda k: cv2.contourArea(contours[k]))
-        offset = np.array([ox, oy])
-        outer = contours[outer_k][:, 0, :] + offset
-        inner = contours[inner_k][:, 0, :] + offset
-        bx, by, bw, bh = cv2.boundingRect(contours[outer_k])
-        box = (bx + ox, by + oy, bx + ox + bw, by + oy + bh)
-        # Membrane: the midline between the band's outer and inner edges, by arclength; the
-        # cell GC is its area centroid (the contour's centroid, as the paper's tracker).
+        if cv2.contourArea(contours[inner_k]) < 0.5 * areas[outer_k]:
+            return None, "the wall is not closed"
+        return (contours[outer_k][:, 0, :] + offset, contours[inner_k][:, 0, :] + offset), ""
+
+    def _midline_of_band(self, outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
         edges = []
         for edge in (outer, inner):
-            world = np.stack(self.frame.to_world(edge[:, 0], edge[:, 1]), axis=1)
+            world = np.stack(self.frame.to_world(edge[:, 0], edge[:, 1], self.ring_z), axis=1)
             area = 0.5 * np.sum(world[:, 0] * np.roll(world[:, 1], -1)
                                 - np.roll(world[:, 0], -1) * world[:, 1])
             if area < 0:
                 world = world[::-1]
             edges.append(_start_at_angle_zero(_arclength_resample(world, MIDLINE_POINTS),
                                               world.mean(axis=0)))
-        fine = 0.5 * (edges[0] + edges[1])
+        return 0.5 * (edges[0] + edges[1])
+
+    def _fitted_ring(self, band: np.ndarray, offset: np.ndarray):
+        """The wall as a closed curve fitted to the paper seen (its gaps, where the wall is
+        seen edge-on, bridged by a smooth shape of :data:`PRIOR_MODES` Fourier modes): the
+        fine curve [MIDLINE_POINTS, 2] (cm), or None and a reason."""
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+        if count <= 1:
+            return None, "no paper seen"
+        keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= 3)[0] + 1
+        vv, uu = np.nonzero(np.isin(labels, keep))
+        if uu.size < 50:
+            return None, "too little of the wall seen"
+        x, y = self.frame.to_world(uu + offset[0], vv + offset[1], self.ring_z)
+        center = self.gc if self.gc is not None else np.array([np.median(x), np.median(y)])
+        expected = self.expected_perimeter
+        for _ in range(3):
+            angle = np.arctan2(y - center[1], x - center[0])
+            r = np.hypot(x - center[0], y - center[1])
+            if expected is not None:  # paper far from the ring is not the ring
+                near = np.abs(r - expected / (2 * np.pi)) < 0.35 * expected / (2 * np.pi)
+                angle, r = angle[near], r[near]
+            bins = ((angle + np.pi) / (2 * np.pi) * ANGLE_BINS).astype(int) % ANGLE_BINS
+            filled = np.bincount(bins, minlength=ANGLE_BINS) > 0
+            if filled.mean() < MIN_COVERAGE:
+                return None, "too little of the wall seen"
+            order = np.argsort(bins, kind="stable")
+            groups = np.split(r[order], np.cumsum(np.bincount(bins, minlength=ANGLE_BINS))[:-1])
+            phi = (np.nonzero(filled)[0] + 0.5) / ANGLE_BINS * 2 * np.pi - np.pi
+            radii = np.array([np.median(g) for g in groups if g.size])
+            modes = np.arange(1, PRIOR_MODES + 1)
+            basis = np.column_stack([np.ones_like(phi), np.cos(np.outer(phi, modes)),
+                                     np.sin(np.outer(phi, modes))])
+            coef, *_ = np.linalg.lstsq(basis, radii, rcond=None)
+            theta = np.linspace(-np.pi, np.pi, MIDLINE_POINTS, endpoint=False)
+            full = np.column_stack([np.ones_like(theta), np.cos(np.outer(theta, modes)),
+                                    np.sin(np.outer(theta, modes))]) @ coef
+            curve = center + full[:, None] * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+            _, _, gx, gy = polygon_area_perimeter_centroid(curve[:, 0], curve[:, 1])
+            center = np.array([gx, gy])
+        return _start_at_angle_zero(curve, center), ""
+
+    def _plausible(self, fine: np.ndarray) -> str:
+        _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
+        expected = self.expected_perimeter
+        if expected is not None and abs(perimeter / expected - 1) > PERIMETER_TOLERANCE:
+            return (f"perimeter {float(perimeter):.1f} cm, not within "
+                    f"{PERIMETER_TOLERANCE:.0%} of {expected:.1f} cm")
+        return ""
+
+    def _detect(self, image: np.ndarray, ox: int, oy: int):
+        """Detect in a sub-image whose top-left pixel is (ox, oy) of the frame; returns the
+        result and the membrane's bounding box (x0, y0, x1, y1) in frame pixels, or None."""
+        nan2 = (np.nan, np.nan)
+        lost = (FLAGS["both_lost"], nan2, np.full((self.nodes, 2), np.nan), (np.nan,) * 3)
+        offset = np.array([ox, oy])
+        band = self._paper(image)
+        edges, self.reason = self._closed_ring(band, offset)
+        fine = None
+        if edges is not None:
+            fine = self._midline_of_band(*edges)
+            self.reason = self._plausible(fine)
+            if not self.reason and self.radius is None:
+                _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
+                self.perimeters.append(float(perimeter))
+        if edges is None or self.reason:
+            fine, self.reason = self._fitted_ring(band, offset)
+            if fine is not None:
+                self.reason = self._plausible(fine)
+        if fine is None or self.reason:
+            self.reason = "membrane: " + self.reason
+            return lost, None
         _, _, gx, gy = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
         gc = np.array([gx, gy])
+        self.gc = gc
         midline = _start_at_angle_zero(_arclength_resample(fine, self.nodes), gc)
-        # Bot: the dark region inside the membrane's inner edge.
+        # The inside: the wall's curve where the bot's outline is seen, less the paper.
+        pu, pv = self.frame.to_pixels(fine[:, 0], fine[:, 1], self.bot_z)
+        outline = np.stack([pu - ox, pv - oy], axis=1)
+        bx, by = np.floor(outline.min(axis=0)).astype(int)
+        ex, ey = np.ceil(outline.max(axis=0)).astype(int) + 1
+        box = (bx + ox, by + oy, ex + ox, ey + oy)
         inside = np.zeros(band.shape, np.uint8)
-        cv2.drawContours(inside, contours, inner_k, 1, -1)
-        bot = self._bot(image, inside, ox, oy)
+        cv2.fillPoly(inside, [np.rint(outline * 16).astype(np.int32)], 1, cv2.LINE_8, 4)
+        inside &= 1 - band
+        if edges is not None:  # the band's hole, where the wall closes
+            hole = np.zeros(band.shape, np.uint8)
+            cv2.drawContours(hole, [edges[1] - offset], 0, 1, -1)
+            inside |= hole & (1 - band)
+        bot = self._bot(image, inside, band, ox, oy)
         flag = FLAGS["ok"] if np.isfinite(bot[0]) else FLAGS["bot_lost"]
         return (flag, (float(gc[0]), float(gc[1])), midline, bot), box
 
     @staticmethod
-    def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, heading: float
+    def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, axis: float
                      ) -> float | None:
         """Offset of a head mark from the bot's center along its axis (px, signed), or None
         unless the light region inside the bot looks like the mark: small,
         on the axis, between the center and an end (gaps where the bot touches the membrane
-        are not marks)."""
+        are not marks). ``axis`` is the image-frame angle of the bot's axis."""
         mm = cv2.moments(mark, binaryImage=True)
         if mm["m00"] < 3 or mm["m00"] > 0.15 * m["m00"]:
             return None
         du, dv = mm["m10"] / mm["m00"] - cu, mm["m01"] / mm["m00"] - cv_
-        along = np.cos(heading) * du - np.sin(heading) * dv  # world frame: (du, -dv)
-        across = -np.sin(heading) * du - np.cos(heading) * dv
+        along = np.cos(axis) * du + np.sin(axis) * dv
+        across = -np.sin(axis) * du + np.cos(axis) * dv
         spread = np.linalg.eigvalsh(np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]])
                                     / m["m00"])
         semi_minor, semi_major = 2 * np.sqrt(np.maximum(spread, 0.0))
@@ -204,30 +339,54 @@ class Tracker:
             return None
         return float(along)
 
-    def _bot(self, image: np.ndarray, inside: np.ndarray, ox: int, oy: int
-             ) -> tuple[float, float, float]:
+    def _bot(self, image: np.ndarray, inside: np.ndarray, band: np.ndarray, ox: int,
+             oy: int) -> tuple[float, float, float]:
         x, y, w, h = cv2.boundingRect(inside)
+        if w == 0 or h == 0:
+            self.reason = "bot: the ring has no inside"
+            return (np.nan, np.nan, np.nan)
         roi = cv2.cvtColor(image[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
         mask_in = inside[y:y + h, x:x + w]
-        if self.dark_level is None:
-            values = roi[mask_in > 0]
-            level, _ = cv2.threshold(values.reshape(-1, 1), 0, 255,
-                                     cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-            self.dark_level = float(level)
-        dark = ((roi < self.dark_level) & (mask_in > 0)).astype(np.uint8)
+        plate = float(np.median(roi[mask_in > 0]))  # the bot covers a small part of it
+        dark = ((roi < self.dark_fraction * plate) & (mask_in > 0)).astype(np.uint8)
         contours, _ = cv2.findContours(dark, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         if not contours:
+            self.reason = "bot: nothing dark inside the ring"
             return (np.nan, np.nan, np.nan)
         blob = max(contours, key=cv2.contourArea)
         if cv2.contourArea(blob) < 20:
+            self.reason = "bot: nothing dark inside the ring"
             return (np.nan, np.nan, np.nan)
+        # The bot is convex: its hull fills the head mark even where the mark meets its edge.
         filled = np.zeros(dark.shape, np.uint8)
-        cv2.drawContours(filled, [blob], 0, 1, -1)
+        cv2.drawContours(filled, [cv2.convexHull(blob)], 0, 1, -1)
+        filled &= mask_in
         m = cv2.moments(filled, binaryImage=True)
         cu, cv_ = m["m10"] / m["m00"], m["m01"] / m["m00"]
         axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])  # image frame
-        heading = -axis  # world frame, defined modulo pi
-        along = self._mark_offset(filled & (1 - dark), m, cu, cv_, heading)
+        # Where the wall hides part of the bot, its outline there is the wall's: the ellipse
+        # through the rest of its outline is the bot's.
+        near_wall = cv2.dilate(band[y:y + h, x:x + w], np.ones((5, 5), np.uint8))
+        hull, _ = cv2.findContours(filled, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        outline = max(hull, key=len)[:, 0, :]
+        free = outline[near_wall[outline[:, 1], outline[:, 0]] == 0]
+        if len(free) < len(outline) and len(free) >= max(20, 0.5 * len(outline)):
+            (cu, cv_), (first, second), degrees = cv2.fitEllipse(free.astype(np.float32))
+            axis = np.radians(degrees) + (np.pi / 2 if second > first else 0.0)  # major axis
+            axis = (axis + np.pi / 2) % np.pi - np.pi / 2
+            if abs(np.cos(axis - 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"]))) < 0.7:
+                axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])
+        # The head mark: light holes of the dark region (not its edge's notches).
+        holes = np.zeros(dark.shape, np.uint8)
+        cv2.drawContours(holes, [blob], 0, 1, -1)
+        holes &= (roi > 0.75 * plate).astype(np.uint8)
+        along = self._mark_offset(holes, m, cu, cv_, axis)
+        # The axis in the world: through two image points on it, mapped.
+        step = 5.0
+        pu = np.array([cu - step * np.cos(axis), cu, cu + step * np.cos(axis)]) + x + ox
+        pv = np.array([cv_ - step * np.sin(axis), cv_, cv_ + step * np.sin(axis)]) + y + oy
+        wx, wy = self.frame.to_world(pu, pv, self.bot_z)
+        heading = float(np.arctan2(wy[2] - wy[0], wx[2] - wx[0]))  # towards +axis
         self.mark_seen = along is not None
         if along is not None:
             if along < 0:
@@ -237,8 +396,9 @@ class Tracker:
         if self.heading is not None:  # keep the heading continuous (unwrapped)
             heading = self.heading + (heading - self.heading + np.pi) % (2 * np.pi) - np.pi
         self.heading = heading
-        wx, wy = self.frame.to_world(cu + x + ox, cv_ + y + oy)
-        return (float(wx), float(wy), float(heading))
+        self.reason = ""
+        return (float(wx[1]), float(wy[1]), float(heading))
+
 
 def _orient_by_motion(bot: np.ndarray, marked: np.ndarray) -> None:
     """Fix the head-tail ambiguity of the frames before the first head mark (all frames
