@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import json
 import math
 import os
 import sys
@@ -232,7 +233,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 def _cmd_track(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import write_dataset
-    from softcell.io.video import track
+    from softcell.io.video import codec, track
 
     try:
         origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
@@ -244,12 +245,27 @@ def _cmd_track(args: argparse.Namespace) -> int:
     if not args.video.is_file():
         raise SoftcellError(f"no such video file: {args.video}")
     check_output(args.output, "tracking", inputs=[args.video], overwrite=args.overwrite)
+    if args.overlay is not None:
+        if os.path.abspath(args.overlay) == os.path.abspath(args.output):
+            raise SoftcellError(f"--overlay {args.overlay} is the tracked file -o: give "
+                                "another name")
+        codec(args.overlay)  # a video suffix, or a clear error
+        check_output(args.overlay, "video", inputs=[args.video], overwrite=args.overwrite,
+                     option="--overlay")
     ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,
-               origin=origin, fps=args.fps, nodes=args.nodes, radius=args.radius,
-               progress=not args.quiet)
+               origin=origin, plate_size=args.plate_size, camera=args.camera,
+               camera_height=args.camera_height, ring_height=args.ring_height,
+               bot_height=args.bot_height, ring_threshold=args.ring_threshold,
+               dark_fraction=args.dark_fraction, fps=args.fps, nodes=args.nodes,
+               radius=args.radius, overlay=args.overlay, progress=not args.quiet)
     path = write_dataset(ds, args.output)
     print(f"{ds.sizes['time']} frames tracked, {ds.attrs['softcell_tracking_summary']}, "
           f"written to {path}")
+    failures = json.loads(ds.attrs["softcell_tracking_failures"])
+    for reason, count in failures.items():
+        print(f"  {count} frame(s) lost: {reason}")
+    if args.overlay is not None:
+        print(f"overlay written to {args.overlay}")
     return 0
 
 
@@ -414,9 +430,31 @@ def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("--arena-size", type=float,
                    help="world width of the frame [cm], to derive the scale")
     p.add_argument("--origin", help="world position X,Y [cm] of the lower-left corner")
+    camera = p.add_argument_group(
+        "camera", "calibrate from the plate seen in the first frame (perspective, lens, "
+                  "parallax) instead of a linear scale; positions in plate coordinates, origin "
+                  "at the plate corner seen at the lower left")
+    camera.add_argument("--plate-size", type=float, help="side of the square plate [cm]")
+    camera.add_argument("--camera", type=Path,
+                        help="OpenCV calibration file (camera_matrix, distortion_coefficients)")
+    camera.add_argument("--camera-height", type=float,
+                        help="camera height above the plate [cm] (default: from --camera, or "
+                             "estimated from the plate when the camera is tilted)")
+    camera.add_argument("--ring-height", type=float, default=0.0,
+                        help="height of the membrane's wall [cm] (parallax; default 0)")
+    camera.add_argument("--bot-height", type=float, default=0.0,
+                        help="height of the bot [cm] (parallax; default 0)")
+    p.add_argument("--ring-threshold", type=float,
+                   help="redness (R - max(G, B)) / R of paper (default: per frame)")
+    p.add_argument("--dark-fraction", type=float, default=0.5,
+                   help="bot pixels are darker than this fraction of the plate (default 0.5)")
+    p.add_argument("--overlay", type=Path,
+                   help="also write the frames with what was tracked drawn on them "
+                        "(.mkv/.avi/.mp4)")
     p.add_argument("--fps", type=float, help="frame rate [1/s] (default: the file's)")
     p.add_argument("--nodes", type=int, default=64, help="membrane points (default 64)")
-    p.add_argument("--radius", type=float, help="membrane radius R [cm] (default: estimated)")
+    p.add_argument("--radius", type=float,
+                   help="membrane radius R [cm]: expected perimeter 2 pi R (default: learned)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
 

@@ -183,7 +183,11 @@ def plate_corners(gray: np.ndarray) -> np.ndarray:
     """The plate's four corners (px) in a grey image: lower-left, lower-right, upper-right,
     upper-left as seen (image v down), from the largest bright region."""
     blurred = cv2.GaussianBlur(gray, (0, 0), 2)
-    _, mask = cv2.threshold(blurred, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    level, mask = cv2.threshold(blurred, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    light, dark = blurred[mask > 0], blurred[mask == 0]
+    if not light.size or not dark.size or np.median(light) - np.median(dark) < 20:
+        raise CalibrationError("no plate found: the frame shows no light square on a darker "
+                               "floor")
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((15, 15), np.uint8))
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
@@ -210,7 +214,8 @@ def plate_corners(gray: np.ndarray) -> np.ndarray:
     # Order as seen: lower-left (largest v - u), then counter-clockwise on screen.
     start = int(np.argmax(quad[:, 1] - quad[:, 0]))
     quad = np.roll(quad, -start, axis=0)
-    if np.cross(quad[1] - quad[0], quad[2] - quad[0]) > 0:  # clockwise in v-down: flip
+    a, b = quad[1] - quad[0], quad[2] - quad[0]
+    if a[0] * b[1] - a[1] * b[0] > 0:  # clockwise in v-down: flip
         quad = np.vstack([quad[:1], quad[1:][::-1]])
     return quad
 

@@ -108,7 +108,7 @@ DARK_FRACTION = 0.5
 #: Plausibility of a membrane: perimeter within this fraction of the expected 2 pi R, and
 #: for a gapped wall, the share of directions around the GC where the wall is seen.
 PERIMETER_TOLERANCE = 0.1
-MIN_COVERAGE = 0.5
+MIN_COVERAGE = 0.35
 #: Fourier modes of the shape prior that bridges the gaps of a wall seen edge-on.
 PRIOR_MODES = 6
 ANGLE_BINS = 180
@@ -150,6 +150,7 @@ class Tracker:
         self.mark_seen = False  # whether the last frame's head mark fixed the direction
         self.reason = ""  # why the last frame failed, "" when it did not
         self.gc: np.ndarray | None = None
+        self.bot_outline: np.ndarray | None = None  # the last bot's outline [K, 2] (px)
 
     def track(self, image: np.ndarray) -> tuple[int, tuple[float, float], np.ndarray,
                                                 tuple[float, float, float]]:
@@ -228,37 +229,67 @@ class Tracker:
         return 0.5 * (edges[0] + edges[1])
 
     def _fitted_ring(self, band: np.ndarray, offset: np.ndarray):
-        """The wall as a closed curve fitted to the paper seen (its gaps, where the wall is
-        seen edge-on, bridged by a smooth shape of :data:`PRIOR_MODES` Fourier modes): the
-        fine curve [MIDLINE_POINTS, 2] (cm), or None and a reason."""
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+        """The wall as a closed curve fitted to the paper seen: its gaps, where the wall is
+        seen edge-on, bridged by the shape prior (a smooth closed curve of
+        :data:`PRIOR_MODES` Fourier modes about the GC, its deformations penalized and, when
+        the radius is known, its mean radius held near it): the fine curve
+        [MIDLINE_POINTS, 2] (cm), or None and a reason."""
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(band,
+                                                                          connectivity=8)
         if count <= 1:
             return None, "no paper seen"
-        keep = np.nonzero(stats[1:, cv2.CC_STAT_AREA] >= 3)[0] + 1
-        vv, uu = np.nonzero(np.isin(labels, keep))
+        areas = stats[1:, cv2.CC_STAT_AREA]
+        expected = self.expected_perimeter
+        radius = None if expected is None else expected / (2 * np.pi)
+        # The ring's pieces: no specks, and (the paper's colour fringes at far edges are
+        # not the ring) near the largest piece, or near the last GC.
+        keep = np.nonzero(areas >= max(3, 0.05 * areas.max()))[0] + 1
+        cx, cy = self.frame.to_world(centroids[keep, 0] + offset[0],
+                                     centroids[keep, 1] + offset[1], self.ring_z)
+        if self.gc is not None and radius is not None:
+            close = np.hypot(cx - self.gc[0], cy - self.gc[1]) < 1.5 * radius
+        else:
+            big = int(np.argmax(areas[keep - 1]))
+            reach = 2.5 * radius if radius is not None else 0.5 * np.hypot(*band.shape) / \
+                max(self.frame.px_per_cm, 1e-9)
+            close = np.hypot(cx - cx[big], cy - cy[big]) < reach
+        vv, uu = np.nonzero(np.isin(labels, keep[close]))
         if uu.size < 50:
             return None, "too little of the wall seen"
         x, y = self.frame.to_world(uu + offset[0], vv + offset[1], self.ring_z)
-        center = self.gc if self.gc is not None else np.array([np.median(x), np.median(y)])
-        expected = self.expected_perimeter
-        for _ in range(3):
+        center = self.gc
+        if center is None:  # the circle through the paper seen (algebraic least squares)
+            a = np.column_stack([2 * x, 2 * y, np.ones_like(x)])
+            center = np.linalg.lstsq(a, x**2 + y**2, rcond=None)[0][:2]
+        modes = np.arange(1, PRIOR_MODES + 1)
+        # Penalty on each unknown (a0, cos modes, sin modes): none on the shift (mode 1),
+        # growing with the mode's bending for the rest.
+        stiffness = np.concatenate([[0.0], np.where(modes > 1, (modes**2 - 1) ** 2, 0.0)])
+        stiffness = np.concatenate([stiffness, stiffness[1:]]) * 1e-3
+        for step in range(4):
             angle = np.arctan2(y - center[1], x - center[0])
             r = np.hypot(x - center[0], y - center[1])
-            if expected is not None:  # paper far from the ring is not the ring
-                near = np.abs(r - expected / (2 * np.pi)) < 0.35 * expected / (2 * np.pi)
+            if radius is not None and (step > 0 or self.gc is not None):
+                near = np.abs(r - radius) < 0.35 * radius  # paper far away is not the ring
                 angle, r = angle[near], r[near]
             bins = ((angle + np.pi) / (2 * np.pi) * ANGLE_BINS).astype(int) % ANGLE_BINS
-            filled = np.bincount(bins, minlength=ANGLE_BINS) > 0
+            counts = np.bincount(bins, minlength=ANGLE_BINS)
+            filled = counts > 0
             if filled.mean() < MIN_COVERAGE:
                 return None, "too little of the wall seen"
             order = np.argsort(bins, kind="stable")
-            groups = np.split(r[order], np.cumsum(np.bincount(bins, minlength=ANGLE_BINS))[:-1])
+            groups = np.split(r[order], np.cumsum(counts)[:-1])
             phi = (np.nonzero(filled)[0] + 0.5) / ANGLE_BINS * 2 * np.pi - np.pi
             radii = np.array([np.median(g) for g in groups if g.size])
-            modes = np.arange(1, PRIOR_MODES + 1)
             basis = np.column_stack([np.ones_like(phi), np.cos(np.outer(phi, modes)),
                                      np.sin(np.outer(phi, modes))])
-            coef, *_ = np.linalg.lstsq(basis, radii, rcond=None)
+            lhs = basis.T @ basis + np.diag(stiffness * phi.size)
+            rhs = basis.T @ radii
+            if radius is not None:  # the known length: mean radius near R
+                weight = 0.1 * phi.size
+                lhs[0, 0] += weight
+                rhs[0] += weight * radius
+            coef = np.linalg.solve(lhs, rhs)
             theta = np.linspace(-np.pi, np.pi, MIDLINE_POINTS, endpoint=False)
             full = np.column_stack([np.ones_like(theta), np.cos(np.outer(theta, modes)),
                                     np.sin(np.outer(theta, modes))]) @ coef
@@ -271,8 +302,7 @@ class Tracker:
         _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
         expected = self.expected_perimeter
         if expected is not None and abs(perimeter / expected - 1) > PERIMETER_TOLERANCE:
-            return (f"perimeter {float(perimeter):.1f} cm, not within "
-                    f"{PERIMETER_TOLERANCE:.0%} of {expected:.1f} cm")
+            return f"perimeter not within {PERIMETER_TOLERANCE:.0%} of 2 pi R"
         return ""
 
     def _detect(self, image: np.ndarray, ox: int, oy: int):
@@ -397,6 +427,7 @@ class Tracker:
             heading = self.heading + (heading - self.heading + np.pi) % (2 * np.pi) - np.pi
         self.heading = heading
         self.reason = ""
+        self.bot_outline = outline + np.array([x + ox, y + oy])
         return (float(wx[1]), float(wy[1]), float(heading))
 
 

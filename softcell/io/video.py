@@ -6,17 +6,23 @@ Rendering a movie is ``softcell.io.render``; the tracker, a pure function of ima
 
 from __future__ import annotations
 
+import collections
+import itertools
+import json
 import os
 import queue
 import threading
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
 import numpy as np
 import xarray as xr
 
+from softcell.core.camera import calibrate_from_plate, read_calibration
 from softcell.core.tracking import (
+    DARK_FRACTION,
     FLAGS,
     MAX_TRACKED_NODES,
     Frame,
@@ -25,6 +31,7 @@ from softcell.core.tracking import (
     tracked_dataset,
 )
 from softcell.errors import SoftcellError
+from softcell.io.files import atomic_write
 
 
 def codec(path: Path) -> str:
@@ -84,10 +91,20 @@ def _read_ahead(capture: cv2.VideoCapture, depth: int = 8) -> Iterator[np.ndarra
 
 def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
           arena_size: float | None = None, origin: tuple[float, float] = (0.0, 0.0),
-          fps: float | None = None, nodes: int = 64, radius: float | None = None,
+          plate_size: float | None = None, camera: str | os.PathLike[str] | None = None,
+          camera_height: float | None = None, ring_height: float = 0.0,
+          bot_height: float = 0.0, ring_threshold: float | None = None,
+          dark_fraction: float = DARK_FRACTION, fps: float | None = None, nodes: int = 64,
+          radius: float | None = None, overlay: str | os.PathLike[str] | None = None,
           progress: bool = False, on_frame: Callable[[int], None] | None = None
           ) -> xr.Dataset:
     """Track a top-view video into the simulation schema (origin ``tracking``).
+
+    Two geometries: a linear frame (``px_per_cm`` or ``arena_size``, and ``origin``: a camera
+    exactly above, no lens distortion), or a camera calibrated from the plate seen in the
+    first frame (``plate_size``: perspective, radial distortion and parallax, see
+    :mod:`softcell.core.camera`; plate coordinates, origin at the plate corner seen at the
+    lower left).
 
     Parameters
     ----------
@@ -96,14 +113,32 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     px_per_cm : float, optional
         Scale; or give ``arena_size`` (cm), the world width of the frame.
     origin : (float, float)
-        World position (cm) of the frame's lower-left corner.
+        World position (cm) of the frame's lower-left corner (linear frame only).
+    plate_size : float, optional
+        Side (cm) of the square plate, wholly in view: calibrate the camera from it.
+    camera : path-like, optional
+        OpenCV calibration file (``camera_matrix``, ``distortion_coefficients``), with
+        ``plate_size``: its lens model replaces the one estimated from the plate's edges.
+    camera_height : float, optional
+        Height (cm) of the camera above the plate, for parallax (default: from the
+        calibration file, or estimated from the plate when the camera is tilted enough).
+    ring_height, bot_height : float
+        Heights (cm) of the membrane's wall and of the bot: their outlines are mapped at half
+        these heights (parallax), which needs ``plate_size``.
+    ring_threshold : float, optional
+        Redness (R - max(G, B)) / R above which a pixel is paper (default: per frame).
+    dark_fraction : float
+        A pixel is bot when darker than this fraction of the plate inside the ring.
     fps : float, optional
         Frame rate (1/s); default: the container's.
     nodes : int
         Membrane points, resampled by arclength.
     radius : float, optional
-        The membrane's radius R (cm), stored as a parameter for the analysis; default
-        estimated as the mean tracked perimeter over 2 pi.
+        The membrane's radius R (cm): the expected perimeter 2 pi R for the plausibility
+        check, and stored as a parameter for the analysis; default estimated as the mean
+        tracked perimeter over 2 pi.
+    overlay : path-like, optional
+        Also write the frames with what was tracked drawn on them (.mkv/.avi/.mp4).
     progress : bool
         Show a progress bar.
     on_frame : callable, optional
@@ -113,15 +148,20 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     -------
     xarray.Dataset
         The schema's variables (NaN where detection failed) plus ``tracking_flag``; failures
-        are counted in the ``softcell_tracking_summary`` attribute.
+        are counted in the ``softcell_tracking_summary`` attribute, by kind in
+        ``softcell_tracking_failures``.
 
     Raises
     ------
     SoftcellError
-        For a bad argument, a missing, empty or unreadable file, or no calibration.
+        For a bad argument, a missing, empty or unreadable file, no calibration, or a plate
+        not found.
     """
     video = Path(video)
     _check_track_arguments(video, px_per_cm, arena_size, origin, fps, nodes, radius)
+    _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_height,
+                            ring_height, bot_height, ring_threshold, dark_fraction)
+    calibration = read_calibration(camera) if camera is not None else None
     capture = cv2.VideoCapture(str(video))
     try:
         if not capture.isOpened():
@@ -131,26 +171,73 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
         rate = float(fps or capture.get(cv2.CAP_PROP_FPS) or 0.0)
         if not (np.isfinite(rate) and rate > 0):
             raise SoftcellError(f"video file {video} states no frame rate: pass fps")
-        if px_per_cm is None:
-            if arena_size is None:
-                raise SoftcellError("pass px_per_cm, or arena_size (cm) to derive it")
-            px_per_cm = width / arena_size
-        if not px_per_cm > 0:
-            raise SoftcellError(f"px_per_cm = {px_per_cm} is not allowed: must be > 0")
-        frame = Frame(float(px_per_cm), width, height, float(origin[0]), float(origin[1]))
+        frames = _read_ahead(capture)
+        first = next(frames, None)
+        if first is None:
+            raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
+        attrs: dict[str, object]
+        if plate_size is not None:
+            geometry = calibrate_from_plate(first, plate_size, camera_height=camera_height,
+                                            calibration=calibration)
+            if ring_height or bot_height:
+                geometry.to_world(0.0, 0.0, max(ring_height, bot_height) / 2)  # or says why
+            attrs = {"softcell_plate_size_cm": float(plate_size),
+                     "softcell_camera": json.dumps(geometry.summary()),
+                     "softcell_ring_height_cm": float(ring_height),
+                     "softcell_bot_height_cm": float(bot_height)}
+        else:
+            if px_per_cm is None:
+                if arena_size is None:
+                    raise SoftcellError("pass px_per_cm, arena_size (cm) to derive it, or "
+                                        "plate_size (cm) to calibrate from the plate")
+                px_per_cm = width / arena_size
+            geometry = Frame(float(px_per_cm), width, height, float(origin[0]),
+                             float(origin[1]))
+            attrs = {"softcell_px_per_cm": float(px_per_cm),
+                     "softcell_origin_cm": np.array(origin, dtype=np.float64)}
+        tracker = Tracker(geometry, nodes, ring_z=ring_height / 2, bot_z=bot_height / 2,
+                          radius=radius, ring_threshold=ring_threshold,
+                          dark_fraction=dark_fraction)
         total = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) or None
-        result = _track_frames(_read_ahead(capture), Tracker(frame, nodes), rate, total,
-                               progress, on_frame)
+        with _overlay_writer(overlay, rate, width, height) as draw:
+            result = _track_frames(itertools.chain([first], frames), tracker, rate, total,
+                                   progress, on_frame, draw)
     finally:
         capture.release()
-    if not result.times:
-        raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
     if all(f == FLAGS["both_lost"] for f in result.flags):
-        raise SoftcellError(f"no frame of {video} was tracked: no red ring found in any of its "
-                            f"{len(result.flags)} frames")
+        raise SoftcellError(f"no frame of {video} was tracked: no plausible ring found in any "
+                            f"of its {len(result.flags)} frames")
+    failures = collections.Counter(r for r in result.reasons if r)
     return tracked_dataset(result, nodes=nodes, radius=radius, attrs={
-        "softcell_video": video.name, "softcell_px_per_cm": float(px_per_cm),
-        "softcell_fps": rate, "softcell_origin_cm": np.array(origin, dtype=np.float64)})
+        "softcell_video": video.name, "softcell_fps": rate, **attrs,
+        "softcell_tracking_failures": json.dumps(dict(failures.most_common()))})
+
+
+def _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_height,
+                            ring_height, bot_height, ring_threshold, dark_fraction) -> None:
+    for name, value in (("plate_size", plate_size), ("camera_height", camera_height)):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 cm")
+    for name, value in (("ring_height", ring_height), ("bot_height", bot_height)):
+        if not (np.isfinite(value) and value >= 0):
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 cm")
+    if plate_size is not None and (px_per_cm is not None or arena_size is not None):
+        raise SoftcellError("plate_size calibrates the camera; px_per_cm and arena_size set a "
+                            "linear frame instead: give one of them")
+    if plate_size is None:
+        for name, value in (("camera", camera), ("camera_height", camera_height),
+                            ("ring_height", ring_height or None),
+                            ("bot_height", bot_height or None)):
+            if value is not None:
+                raise SoftcellError(f"{name} needs plate_size: parallax and lenses are "
+                                    "corrected only with a camera calibrated from the plate")
+    if ring_threshold is not None and not (np.isfinite(ring_threshold)
+                                           and 0 < ring_threshold < 1):
+        raise SoftcellError(f"ring_threshold = {ring_threshold} is not allowed: a redness "
+                            "(R - max(G, B)) / R between 0 and 1")
+    if not (np.isfinite(dark_fraction) and 0 < dark_fraction < 1):
+        raise SoftcellError(f"dark_fraction = {dark_fraction} is not allowed: must be between "
+                            "0 and 1 (of the plate's grey level)")
 
 
 def _check_track_arguments(video: Path, px_per_cm, arena_size, origin, fps, nodes: int,
@@ -176,7 +263,9 @@ def _check_track_arguments(video: Path, px_per_cm, arena_size, origin, fps, node
 
 def _track_frames(frames: Iterator[np.ndarray], tracker: Tracker, rate: float,
                   total: int | None, progress: bool,
-                  on_frame: Callable[[int], None] | None) -> TrackResult:
+                  on_frame: Callable[[int], None] | None,
+                  draw: Callable[[np.ndarray, Tracker, tuple], None] | None = None
+                  ) -> TrackResult:
     """Run the tracker over every frame; frame k is at time k / rate (s)."""
     from tqdm.auto import tqdm
 
@@ -190,7 +279,63 @@ def _track_frames(frames: Iterator[np.ndarray], tracker: Tracker, rate: float,
             result.bot.append(bot)
             result.flags.append(flag)
             result.marked.append(tracker.mark_seen and np.isfinite(bot[2]))
+            result.reasons.append(tracker.reason)
+            if draw:
+                draw(image, tracker, (index / rate, flag, gc, membrane, bot))
             bar.update(1)
             if on_frame:
                 on_frame(index + 1)
     return result
+
+
+@contextmanager
+def _overlay_writer(path: str | os.PathLike[str] | None, rate: float, width: int, height: int
+                    ) -> Iterator[Callable[[np.ndarray, Tracker, tuple], None] | None]:
+    """A function that draws one tracked frame into the overlay movie at ``path`` (written
+    atomically), or None without a path."""
+    if path is None:
+        yield None
+        return
+    path = Path(path)
+    fourcc = cv2.VideoWriter_fourcc(*codec(path))
+    with atomic_write(path) as tmp:
+        writer = cv2.VideoWriter(str(tmp), fourcc, rate, (width, height))
+        if not writer.isOpened():
+            raise SoftcellError(f"cannot write the overlay video {path}")
+        try:
+            yield lambda image, tracker, state: writer.write(draw_overlay(image, tracker,
+                                                                          *state))
+        finally:
+            writer.release()
+
+
+def draw_overlay(image: np.ndarray, tracker: Tracker, time: float, flag: int, gc, membrane,
+                 bot) -> np.ndarray:
+    """One frame with what was tracked drawn on it: the membrane's midline (green), its GC
+    (a cross), the bot's outline (yellow) and heading (an arrow of 3 cm), or the reason a
+    frame was lost (red text)."""
+    out = image.copy()
+    geometry, scale = tracker.frame, 16  # drawing at 1/16 px
+    thick = max(1, image.shape[1] // 640)
+    if np.isfinite(gc[0]):
+        u, v = geometry.to_pixels(membrane[:, 0], membrane[:, 1], tracker.ring_z)
+        pts = np.rint(np.stack([u, v], axis=1) * scale).astype(np.int32)
+        cv2.polylines(out, [pts], True, (60, 220, 60), thick, cv2.LINE_AA, 4)
+        gu, gv = geometry.to_pixels(np.array([gc[0]]), np.array([gc[1]]), tracker.ring_z)
+        cv2.drawMarker(out, (int(round(gu[0])), int(round(gv[0]))), (60, 220, 60),
+                       cv2.MARKER_CROSS, 12 * thick, thick)
+    if np.isfinite(bot[0]) and tracker.bot_outline is not None:
+        cv2.polylines(out, [tracker.bot_outline.astype(np.int32)], True, (0, 220, 255), thick,
+                      cv2.LINE_AA)
+        ends = geometry.to_pixels(np.array([bot[0], bot[0] + 3 * np.cos(bot[2])]),
+                                  np.array([bot[1], bot[1] + 3 * np.sin(bot[2])]),
+                                  tracker.bot_z)
+        cv2.arrowedLine(out, (int(round(ends[0][0])), int(round(ends[1][0]))),
+                        (int(round(ends[0][1])), int(round(ends[1][1]))), (0, 220, 255),
+                        thick, cv2.LINE_AA, tipLength=0.3)
+    text = f"t = {time:.2f} s"
+    if flag != FLAGS["ok"]:
+        text += f"  LOST ({tracker.reason})"
+    cv2.putText(out, text, (10, 30 * thick), cv2.FONT_HERSHEY_SIMPLEX, 0.8 * thick,
+                (0, 0, 230) if flag != FLAGS["ok"] else (40, 40, 40), thick, cv2.LINE_AA)
+    return out

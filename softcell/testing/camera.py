@@ -185,20 +185,27 @@ def _shade_roi(scene: Scene, p0: np.ndarray, g: np.ndarray, wall: _Membrane,
                bot: np.ndarray, heading: float, a: float, b: float) -> np.ndarray:
     """Colour of the rays (p0, g) [..., 2]: the highest surface each meets, walking down."""
     top = max(scene.ring_height, scene.bot_height)
-    levels = np.linspace(top, 0.0, 16)
+    # Heights walked down: the tops exactly (a top face is met there), the rest in steps.
+    levels = np.unique(np.concatenate([np.linspace(top, 0.0, 16),
+                                       [scene.ring_height, scene.bot_height]]))[::-1]
     colour = _plate_colour(scene, p0)
     # Cast shadows on the plate: the ray from the plate point towards the lamp meets the
     # bot or the wall below their tops.
     light = np.array(scene.light) / scene.light[2]
     if scene.cast_shadow:
         blocked = np.zeros(p0.shape[:-1], bool)
-        for z in np.linspace(0.1, top, 6):
+        previous = None
+        for z in np.linspace(0.0, top, 8):
             q = p0 + z * light[:2]
             if z <= scene.bot_height:
                 lx, ly = _bot_local(q, bot, heading)
                 blocked |= (lx / a) ** 2 + (ly / b) ** 2 <= 1
-            if z <= scene.ring_height:
-                blocked |= np.abs(wall.sample(wall.sd, q)) <= max(scene.wall / 2, 0.05)
+            if z <= scene.ring_height:  # the light's ray meets the wall, or crosses it
+                sd = wall.sample(wall.sd, q)
+                blocked |= np.abs(sd) <= scene.wall / 2
+                if previous is not None:
+                    blocked |= np.sign(sd) != np.sign(previous)
+                previous = sd
         colour = colour * (1 - scene.cast_shadow * blocked[..., None])
     paper = OFF_RED_PAPER if scene.off_red else RED_PAPER
     hit = np.zeros(p0.shape[:-1], bool)
