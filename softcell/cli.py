@@ -255,7 +255,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
     ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,
                origin=origin, plate_size=args.plate_size, camera=args.camera,
                camera_height=args.camera_height, ring_height=args.ring_height,
-               bot_height=args.bot_height, ring_threshold=args.ring_threshold,
+               bot_height=args.bot_height, ring_color=args.ring_color,
+               ring_threshold=args.ring_threshold,
                dark_fraction=args.dark_fraction, fps=args.fps, nodes=args.nodes,
                radius=args.radius, overlay=args.overlay, progress=not args.quiet)
     path = write_dataset(ds, args.output)
@@ -444,8 +445,11 @@ def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
                         help="height of the membrane's wall [cm] (parallax; default 0)")
     camera.add_argument("--bot-height", type=float, default=0.0,
                         help="height of the bot [cm] (parallax; default 0)")
+    p.add_argument("--ring-color", default="red",
+                   help="the paper's colour: red (also orange), green, blue, yellow")
     p.add_argument("--ring-threshold", type=float,
-                   help="redness (R - max(G, B)) / R of paper (default: per frame)")
+                   help="colourfulness of paper, (R - max(G, B)) / R for red (default: per "
+                        "frame)")
     p.add_argument("--dark-fraction", type=float, default=0.5,
                    help="bot pixels are darker than this fraction of the plate (default 0.5)")
     p.add_argument("--overlay", type=Path,

@@ -200,3 +200,16 @@ def test_cli_track_from_the_plate_with_an_overlay(simulated, tmp_path, capsys):
     tracked = softcell.open_dataset(tmp_path / "t.nc")
     assert abs(float(tracked.cell_x[0, 0]) - footage.cell[0, 0]) < 0.05
     assert '"camera_position_cm"' in tracked.attrs["softcell_camera"]
+
+
+def test_paper_of_another_colour_is_named(simulated, tmp_path):
+    footage = film(simulated, tmp_path / "blue.mkv", replace(Scene(), paper=(200, 90, 40)),
+                   offset=OFFSET, end=0.1)
+    tracked = track(footage.path, plate_size=PLATE, camera_height=150.0, radius=8.0,
+                    ring_color="blue", **HEIGHTS)
+    share, gc, _, _ = errors(tracked, footage)
+    assert share == 1 and gc < 0.02, (share, gc)
+    with pytest.raises(SoftcellError, match="no plausible ring"):
+        track(footage.path, plate_size=PLATE, camera_height=150.0, radius=8.0, **HEIGHTS)
+    with pytest.raises(SoftcellError, match="ring_color = 'purple' is not allowed"):
+        track(footage.path, plate_size=PLATE, ring_color="purple")

@@ -104,6 +104,8 @@ def _start_at_angle_zero(points: np.ndarray, center: np.ndarray) -> np.ndarray:
 #: grey level is below DARK_FRACTION of the plate's inside the ring (shadows of 15-35 % are
 #: not: they keep 65-85 % of it).
 RING_FRACTION = 0.45
+#: Paper colours the tracker knows (orange paper is "red": its red channel leads).
+RING_COLORS = ("red", "green", "blue", "yellow")
 DARK_FRACTION = 0.5
 #: Plausibility of a membrane: perimeter within this fraction of the expected 2 pi R, and
 #: for a gapped wall, the share of directions around the GC where the wall is seen.
@@ -128,16 +130,24 @@ class Tracker:
         the ring's and the bot's height: what the camera sees of each spans their height).
     radius : float, optional
         Expected membrane radius (cm); default learned from the closed rings seen.
+    ring_color : str
+        The paper's colour, one of :data:`RING_COLORS`: its colourfulness is the share of
+        its own channel(s) above the others, (R - max(G, B)) / R for red (or orange) paper.
     ring_threshold : float, optional
-        Redness (R - max(G, B)) / R above which a pixel is paper; default per frame,
-        :data:`RING_FRACTION` of the paper's redness.
+        Colourfulness above which a pixel is paper; default per frame,
+        :data:`RING_FRACTION` of the paper's.
     dark_fraction : float
         A pixel is bot when darker than this fraction of the plate inside the ring.
     """
 
     def __init__(self, frame, nodes: int = 64, *, ring_z: float = 0.0, bot_z: float = 0.0,
-                 radius: float | None = None, ring_threshold: float | None = None,
+                 radius: float | None = None, ring_color: str = "red",
+                 ring_threshold: float | None = None,
                  dark_fraction: float = DARK_FRACTION) -> None:
+        if ring_color not in RING_COLORS:
+            raise ValueError(f"ring colour {ring_color!r} is not known: one of "
+                             f"{', '.join(RING_COLORS)}")
+        self.ring_color = ring_color
         self.frame = frame
         self.nodes = nodes
         self.ring_z, self.bot_z = float(ring_z), float(bot_z)
@@ -191,8 +201,11 @@ class Tracker:
     def _paper(self, image: np.ndarray) -> np.ndarray:
         """Paper mask of a BGR image: redness above this frame's threshold."""
         b, g, r = (c.astype(np.float32) for c in cv2.split(cv2.medianBlur(image, 3)))
-        bright = r >= 0.25 * float(np.percentile(r, 90))  # dark pixels have no colour
-        redness = np.where(bright, (r - np.maximum(g, b)) / np.maximum(r, 1.0), 0.0)
+        main, rest = {"red": (r, np.maximum(g, b)), "green": (g, np.maximum(r, b)),
+                      "blue": (b, np.maximum(r, g)),
+                      "yellow": (np.minimum(r, g), b)}[self.ring_color]
+        bright = main >= 0.25 * float(np.percentile(main, 90))  # dark pixels have no colour
+        redness = np.where(bright, (main - rest) / np.maximum(main, 1.0), 0.0)
         level = self.ring_threshold
         if level is None:
             paper = redness[redness > 0.3]

@@ -24,6 +24,7 @@ from softcell.core.camera import calibrate_from_plate, read_calibration
 from softcell.core.tracking import (
     DARK_FRACTION,
     FLAGS,
+    RING_COLORS,
     MAX_TRACKED_NODES,
     Frame,
     Tracker,
@@ -93,7 +94,8 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
           arena_size: float | None = None, origin: tuple[float, float] = (0.0, 0.0),
           plate_size: float | None = None, camera: str | os.PathLike[str] | None = None,
           camera_height: float | None = None, ring_height: float = 0.0,
-          bot_height: float = 0.0, ring_threshold: float | None = None,
+          bot_height: float = 0.0, ring_color: str = "red",
+          ring_threshold: float | None = None,
           dark_fraction: float = DARK_FRACTION, fps: float | None = None, nodes: int = 64,
           radius: float | None = None, overlay: str | os.PathLike[str] | None = None,
           progress: bool = False, on_frame: Callable[[int], None] | None = None
@@ -125,8 +127,11 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     ring_height, bot_height : float
         Heights (cm) of the membrane's wall and of the bot: their outlines are mapped at half
         these heights (parallax), which needs ``plate_size``.
+    ring_color : str
+        The paper's colour: red (also orange), green, blue or yellow.
     ring_threshold : float, optional
-        Redness (R - max(G, B)) / R above which a pixel is paper (default: per frame).
+        Colourfulness ((R - max(G, B)) / R for red) above which a pixel is paper (default:
+        per frame).
     dark_fraction : float
         A pixel is bot when darker than this fraction of the plate inside the ring.
     fps : float, optional
@@ -161,6 +166,9 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     _check_track_arguments(video, px_per_cm, arena_size, origin, fps, nodes, radius)
     _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_height,
                             ring_height, bot_height, ring_threshold, dark_fraction)
+    if ring_color not in RING_COLORS:
+        raise SoftcellError(f"ring_color = {ring_color!r} is not allowed: one of "
+                            f"{', '.join(RING_COLORS)}")
     calibration = read_calibration(camera) if camera is not None else None
     capture = cv2.VideoCapture(str(video))
     try:
@@ -196,7 +204,8 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
             attrs = {"softcell_px_per_cm": float(px_per_cm),
                      "softcell_origin_cm": np.array(origin, dtype=np.float64)}
         tracker = Tracker(geometry, nodes, ring_z=ring_height / 2, bot_z=bot_height / 2,
-                          radius=radius, ring_threshold=ring_threshold,
+                          radius=radius, ring_color=ring_color,
+                          ring_threshold=ring_threshold,
                           dark_fraction=dark_fraction)
         total = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) or None
         with _overlay_writer(overlay, rate, width, height) as draw:

@@ -45,7 +45,7 @@ class Scene:
     the lamp arm's soft shadow across the plate, 0: none), ``cast_shadow`` (darkness of the
     bot's and wall's shadows), ``noise`` (sensor noise, grey levels, through a Bayer mosaic),
     ``blur`` (exposure as a fraction of the frame interval: motion blur), ``off_red`` (orange
-    paper with a specular highlight), ``wall`` thickness and ``ring_height``, ``bot_height``.
+    paper with a specular highlight), ``paper`` (another colour, BGR), ``wall`` thickness and ``ring_height``, ``bot_height``.
     """
 
     size: int = 1024
@@ -64,6 +64,7 @@ class Scene:
     noise: float = 0.0
     blur: float = 0.0
     off_red: bool = False
+    paper: tuple[float, float, float] | None = None  # BGR, instead of red or orange
     light: tuple[float, float, float] = (0.45, 0.25, 1.0)  # towards the lamp
     oversample: int = 2
 
@@ -207,7 +208,8 @@ def _shade_roi(scene: Scene, p0: np.ndarray, g: np.ndarray, wall: _Membrane,
                     blocked |= np.sign(sd) != np.sign(previous)
                 previous = sd
         colour = colour * (1 - scene.cast_shadow * blocked[..., None])
-    paper = OFF_RED_PAPER if scene.off_red else RED_PAPER
+    paper = np.array(scene.paper) if scene.paper is not None else (
+        OFF_RED_PAPER if scene.off_red else RED_PAPER)
     hit = np.zeros(p0.shape[:-1], bool)
     previous = None
     for z in levels:
