@@ -136,6 +136,19 @@ class PlateCamera:
             x, y = c[0] + (x - c[0]) * factor, c[1] + (y - c[1]) * factor
         return self.distort(*_apply(self.homography, x, y))
 
+    def plate_mask(self, inset: float = 0.5) -> np.ndarray:
+        """A uint8 mask [height, width] of the plate in the image, ``inset`` cm inside its
+        edges: where a cell on the plate can be (the floor around it is not searched)."""
+        side = np.linspace(inset, self.plate_size - inset, 40)
+        low, high = np.full(40, inset), np.full(40, self.plate_size - inset)
+        x = np.concatenate([side, high, side[::-1], low])
+        y = np.concatenate([low, side, high, side[::-1]])
+        u, v = self.to_pixels(x, y)
+        mask = np.zeros((self.height, self.width), np.uint8)
+        cv2.fillPoly(mask, [np.rint(np.stack([u, v], axis=1) * 16).astype(np.int32)], 1,
+                     cv2.LINE_8, 4)
+        return mask
+
     def _position_for(self, z: float) -> np.ndarray:
         if self.position is None:
             raise CalibrationError(

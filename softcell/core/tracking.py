@@ -161,6 +161,8 @@ class Tracker:
         self.reason = ""  # why the last frame failed, "" when it did not
         self.gc: np.ndarray | None = None
         self.bot_outline: np.ndarray | None = None  # the last bot's outline [K, 2] (px)
+        mask = getattr(frame, "plate_mask", None)
+        self.search_mask = mask() if mask is not None else None
 
     def track(self, image: np.ndarray) -> tuple[int, tuple[float, float], np.ndarray,
                                                 tuple[float, float, float]]:
@@ -198,14 +200,17 @@ class Tracker:
             return 2 * np.pi * self.radius
         return float(np.median(self.perimeters[-50:])) if self.perimeters else None
 
-    def _paper(self, image: np.ndarray) -> np.ndarray:
-        """Paper mask of a BGR image: redness above this frame's threshold."""
+    def _paper(self, image: np.ndarray, region: np.ndarray | None = None) -> np.ndarray:
+        """Paper mask of a BGR image (within ``region``, a mask, if given): redness above
+        this frame's threshold."""
         b, g, r = (c.astype(np.float32) for c in cv2.split(cv2.medianBlur(image, 3)))
         main, rest = {"red": (r, np.maximum(g, b)), "green": (g, np.maximum(r, b)),
                       "blue": (b, np.maximum(r, g)),
                       "yellow": (np.minimum(r, g), b)}[self.ring_color]
         bright = main >= 0.25 * float(np.percentile(main, 90))  # dark pixels have no colour
         redness = np.where(bright, (main - rest) / np.maximum(main, 1.0), 0.0)
+        if region is not None:
+            redness = np.where(region > 0, redness, 0.0)
         level = self.ring_threshold
         if level is None:
             paper = redness[redness > 0.3]
@@ -324,7 +329,10 @@ class Tracker:
         nan2 = (np.nan, np.nan)
         lost = (FLAGS["both_lost"], nan2, np.full((self.nodes, 2), np.nan), (np.nan,) * 3)
         offset = np.array([ox, oy])
-        band = self._paper(image)
+        region = None
+        if self.search_mask is not None:  # the plate: paper on the floor is not the ring
+            region = self.search_mask[oy:oy + image.shape[0], ox:ox + image.shape[1]]
+        band = self._paper(image, region)
         edges, self.reason = self._closed_ring(band, offset)
         fine = None
         if edges is not None:

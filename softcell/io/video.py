@@ -24,8 +24,8 @@ from softcell.core.camera import calibrate_from_plate, read_calibration
 from softcell.core.tracking import (
     DARK_FRACTION,
     FLAGS,
-    RING_COLORS,
     MAX_TRACKED_NODES,
+    RING_COLORS,
     Frame,
     Tracker,
     TrackResult,

@@ -45,7 +45,8 @@ class Scene:
     the lamp arm's soft shadow across the plate, 0: none), ``cast_shadow`` (darkness of the
     bot's and wall's shadows), ``noise`` (sensor noise, grey levels, through a Bayer mosaic),
     ``blur`` (exposure as a fraction of the frame interval: motion blur), ``off_red`` (orange
-    paper with a specular highlight), ``paper`` (another colour, BGR), ``wall`` thickness and ``ring_height``, ``bot_height``.
+    paper with a specular highlight), ``paper`` (another colour, BGR), ``wall`` thickness
+    and ``ring_height``, ``bot_height``.
     """
 
     size: int = 1024
