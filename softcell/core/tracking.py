@@ -342,9 +342,12 @@ class Tracker:
                 _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
                 self.perimeters.append(float(perimeter))
         if edges is None or self.reason:
+            closed_reason = self.reason if edges is not None else ""
             fine, self.reason = self._fitted_ring(band, offset)
             if fine is not None:
                 self.reason = self._plausible(fine)
+            elif closed_reason:  # a closed ring was seen: why it was refused says more
+                self.reason = closed_reason
         if fine is None or self.reason:
             self.reason = "membrane: " + self.reason
             return lost, None

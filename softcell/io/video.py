@@ -213,10 +213,13 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
                                    progress, on_frame, draw)
     finally:
         capture.release()
-    if all(f == FLAGS["both_lost"] for f in result.flags):
-        raise SoftcellError(f"no frame of {video} was tracked: no plausible ring found in any "
-                            f"of its {len(result.flags)} frames")
     failures = collections.Counter(r for r in result.reasons if r)
+    if all(f == FLAGS["both_lost"] for f in result.flags):
+        why = "; ".join(f"{n} x {reason}" for reason, n in failures.most_common())
+        hint = (" (is the scale right? check --plate-size or --px-per-cm, and --radius)"
+                if "perimeter" in why else "")
+        raise SoftcellError(f"no frame of {video} was tracked: no plausible ring found in any "
+                            f"of its {len(result.flags)} frames: {why}{hint}")
     return tracked_dataset(result, nodes=nodes, radius=radius, attrs={
         "softcell_video": video.name, "softcell_fps": rate, **attrs,
         "softcell_tracking_failures": json.dumps(dict(failures.most_common()))})
