@@ -182,7 +182,8 @@ def test_bad_camera_requests_are_named(simulated, tmp_path, capsys):
         track(video, plate_size=PLATE, camera=tmp_path / "missing.yml")
     with pytest.raises(SoftcellError, match="pass the camera height"):
         track(video, plate_size=PLATE, **HEIGHTS)
-    with pytest.raises(SoftcellError, match=r"perimeter not within 10% of 2 pi R \(is the scale right"):
+    wrong = r"perimeter not within 10% of 2 pi R \(is the scale right"
+    with pytest.raises(SoftcellError, match=wrong):
         track(video, plate_size=2 * PLATE, radius=8.0)  # a wrong plate size
     assert main(["track", str(video), "--plate-size", "80", "-o", str(tmp_path / "t.nc"),
                  "--overlay", str(video)]) == 2
