@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     from softcell.core.schema import validate
     from softcell.io.figures import make_figures
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
+    from softcell.io.render import render
+    from softcell.io.video import track
     from softcell.workflows.ensemble import simulate
     from softcell.workflows.reproduce import reproduce
 
@@ -36,8 +38,10 @@ __all__ = [
     "make_figures",
     "open_dataset",
     "read_dataset",
+    "render",
     "reproduce",
     "simulate",
+    "track",
     "validate",
     "write_dataset",
 ]
@@ -52,6 +56,8 @@ _LAZY = {
     "RunConfig": "softcell.core.runconfig",
     "reproduce": "softcell.workflows.reproduce",
     "make_figures": "softcell.io.figures",
+    "render": "softcell.io.render",
+    "track": "softcell.io.video",
 }
 
 if "xarray" in __import__("sys").modules:  # register ds.softcell now; else when softcell
