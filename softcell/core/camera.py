@@ -269,9 +269,9 @@ def edge_points(gray: np.ndarray, corners: np.ndarray) -> list[np.ndarray]:
 
 
 def _line_residuals(points: np.ndarray) -> np.ndarray:
-    mean = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - mean, full_matrices=False)
-    return (points - mean) @ vt[1]
+    """Signed distances (px) of points from their total-least-squares line."""
+    line = _fit_line(points)
+    return points @ line[:2] + line[2]
 
 
 def _fit_line(points: np.ndarray) -> np.ndarray:
