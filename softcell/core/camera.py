@@ -353,15 +353,13 @@ def calibrate_from_plate(image: np.ndarray, plate_size: float, *,
         image_corners.append(p[:2] / p[2])
     s = float(plate_size)
     plate = np.array([[0, 0], [s, 0], [s, s], [0, s]], np.float64)
-    homography = cv2.getPerspectiveTransform(plate.astype(np.float32),
-                                             np.array(image_corners, np.float32))
-    homography = _refine(homography, plate, np.array(image_corners))
+    homography = _homography(plate, np.array(image_corners))
     focal = None if matrix is None else float(np.sqrt(matrix[0, 0] * matrix[1, 1]))
     position = _camera_position(homography, center, focal, camera_height, scale)
     return PlateCamera(homography, center, scale, k, position, w, h, s, matrix, dist)
 
 
-def _refine(h: np.ndarray, plate: np.ndarray, corners: np.ndarray) -> np.ndarray:
+def _homography(plate: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """The exact homography of four point pairs, in double precision."""
     a = []
     for (x, y), (u, v) in zip(plate, corners, strict=True):

@@ -282,7 +282,7 @@ class Tracker:
         modes = np.arange(1, PRIOR_MODES + 1)
         # Penalty on each unknown (a0, cos modes, sin modes): none on the shift (mode 1),
         # growing with the mode's bending for the rest.
-        stiffness = np.concatenate([[0.0], np.where(modes > 1, (modes**2 - 1) ** 2, 0.0)])
+        stiffness = np.concatenate([[0.0], (modes**2 - 1.0) ** 2])  # 0 for the shift
         stiffness = np.concatenate([stiffness, stiffness[1:]]) * 1e-3
         for step in range(4):
             angle = np.arctan2(y - center[1], x - center[0])
@@ -316,12 +316,13 @@ class Tracker:
             center = np.array([gx, gy])
         return _start_at_angle_zero(curve, center), ""
 
-    def _plausible(self, fine: np.ndarray) -> str:
+    def _plausible(self, fine: np.ndarray) -> tuple[str, float]:
+        """Why a membrane curve (cm) is refused ("" if it is not), and its perimeter (cm)."""
         _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
         expected = self.expected_perimeter
         if expected is not None and abs(perimeter / expected - 1) > PERIMETER_TOLERANCE:
-            return f"perimeter not within {PERIMETER_TOLERANCE:.0%} of 2 pi R"
-        return ""
+            return f"perimeter not within {PERIMETER_TOLERANCE:.0%} of 2 pi R", float(perimeter)
+        return "", float(perimeter)
 
     def _detect(self, image: np.ndarray, ox: int, oy: int):
         """Detect in a sub-image whose top-left pixel is (ox, oy) of the frame; returns the
@@ -337,15 +338,14 @@ class Tracker:
         fine = None
         if edges is not None:
             fine = self._midline_of_band(*edges)
-            self.reason = self._plausible(fine)
+            self.reason, perimeter = self._plausible(fine)
             if not self.reason and self.radius is None:
-                _, perimeter, _, _ = polygon_area_perimeter_centroid(fine[:, 0], fine[:, 1])
-                self.perimeters.append(float(perimeter))
+                self.perimeters.append(perimeter)
         if edges is None or self.reason:
             closed_reason = self.reason if edges is not None else ""
             fine, self.reason = self._fitted_ring(band, offset)
             if fine is not None:
-                self.reason = self._plausible(fine)
+                self.reason, _ = self._plausible(fine)
             elif closed_reason:  # a closed ring was seen: why it was refused says more
                 self.reason = closed_reason
         if fine is None or self.reason:
@@ -417,7 +417,8 @@ class Tracker:
         filled &= mask_in
         m = cv2.moments(filled, binaryImage=True)
         cu, cv_ = m["m10"] / m["m00"], m["m01"] / m["m00"]
-        axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])  # image frame
+        moment_axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])  # image frame
+        axis = moment_axis
         # Where the wall hides part of the bot, its outline there is the wall's: the ellipse
         # through the rest of its outline is the bot's.
         near_wall = cv2.dilate(band[y:y + h, x:x + w], np.ones((5, 5), np.uint8))
@@ -428,8 +429,8 @@ class Tracker:
             (cu, cv_), (first, second), degrees = cv2.fitEllipse(free.astype(np.float32))
             axis = np.radians(degrees) + (np.pi / 2 if second > first else 0.0)  # major axis
             axis = (axis + np.pi / 2) % np.pi - np.pi / 2
-            if abs(np.cos(axis - 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"]))) < 0.7:
-                axis = 0.5 * np.arctan2(2 * m["mu11"], m["mu20"] - m["mu02"])
+            if abs(np.cos(axis - moment_axis)) < 0.7:  # a fit gone astray
+                axis = moment_axis
         # The head mark: light holes of the dark region (not its edge's notches).
         holes = np.zeros(dark.shape, np.uint8)
         cv2.drawContours(holes, [blob], 0, 1, -1)
