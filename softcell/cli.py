@@ -323,6 +323,29 @@ def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.set_defaults(func=_cmd_beyond)
 
 
+def _cmd_study(args: argparse.Namespace) -> int:
+    from softcell.workflows.sensitivity import VARIANTS, sensitivity, variants_named
+
+    variants = VARIANTS if args.only is None else variants_named(
+        [n.strip() for n in args.only.split(",") if n.strip()])
+    report = sensitivity(args.output, seed=args.seed, workers=args.workers, variants=variants,
+                         overwrite=args.overwrite, progress=not args.quiet, log=_note)
+    print(f"done: {report}")
+    return 0
+
+
+def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    p.add_argument("study", choices=["sensitivity"],
+                   help="sensitivity: the quick design over one of the paper's unknowns at a "
+                        "time (bot size, k, Lambda_c, lambda, rotation, friction)")
+    p.add_argument("--only", metavar="NAMES",
+                   help="comma-separated variants to run beside the defaults (default: all: "
+                        "bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
+                        "lambda_1e-4, pivot, coulomb)")
+    _add_beyond(p, strict, specs)
+    p.set_defaults(func=_cmd_study)
+
+
 def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, help=workers_help)
@@ -542,6 +565,8 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
                   _add_reproduce),
     "beyond": ("the quick design with static friction (3 thresholds) and in the arena, beside "
                "the paper's model", _add_beyond),
+    "study": ("'study sensitivity': which of the paper's findings its unknowns decide, one "
+              "unknown at a time", _add_study),
     "cache": ("the compiled-model cache: where it is, what it holds; 'cache clear' empties it",
               _add_cache),
 }

@@ -33,12 +33,17 @@ from softcell.workflows.reproduce import QUICK, Design, reproduce
 
 @dataclass(frozen=True)
 class Variant:
-    """One model variant of the study: components and parameters over the quick design's."""
+    """One model variant of a study: components and parameters over the quick design's.
+
+    ``name`` is its folder, ``label`` its legend; ``unknown`` names what it varies (the
+    sensitivity study groups its variants by it; empty for the reference).
+    """
 
     name: str
     label: str
     components: dict[str, Any] = field(default_factory=dict)
     parameters: dict[str, Any] = field(default_factory=dict)
+    unknown: str = ""
 
     def design(self, base: Design = QUICK) -> Design:
         return replace(base, name=f"{base.name}-{self.name}",

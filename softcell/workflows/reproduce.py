@@ -47,7 +47,8 @@ class Design:
     """What :func:`reproduce` runs.
 
     ``duration`` None means the paper's design (docs/model.md §2: 900 s for R <= 9 cm, 1800 s
-    above). ``discard`` (s) is left out of every statistic.
+    above). ``discard`` (s) is left out of every statistic. ``video`` None leaves out the
+    experimental pipeline (filming, tracking; and the tracked markers of the figures).
     """
 
     name: str
@@ -56,7 +57,7 @@ class Design:
     duration: float | None = None
     discard: float = 15.0
     free_bot_realizations: int = 25
-    video: VideoDesign = field(default_factory=VideoDesign)
+    video: VideoDesign | None = field(default_factory=VideoDesign)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
     parameters: dict[str, Any] = field(default_factory=dict)  # beyond the defaults
     caveat: str = ""  # what the design gives up against the paper's, for the report
@@ -64,10 +65,11 @@ class Design:
     def describe(self) -> str:
         length = ("the paper's durations (900 s for R <= 9 cm, 1800 s above)"
                   if self.duration is None else f"{self.duration:g} s each")
+        video = ("no video" if self.video is None else
+                 f"video of {self.video.span:g} s at R = {self.video.radius:g} cm")
         return (f"{len(self.radii)} radii ({', '.join(f'{r:g}' for r in self.radii)} cm) x "
                 f"{self.realizations} realizations, {length}; {self.free_bot_realizations} "
-                f"free-bot realizations; first {self.discard:g} s discarded; video of "
-                f"{self.video.span:g} s at R = {self.video.radius:g} cm")
+                f"free-bot realizations; first {self.discard:g} s discarded; {video}")
 
 
 #: The README's main job: every radius, fewer and shorter runs; ~5 minutes on 2 cores.
@@ -196,7 +198,7 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     if design.realizations < 1 or design.free_bot_realizations < 1:
         raise SoftcellError("a design needs at least one realization per radius and one "
                             "free-bot realization")
-    if design.video.radius not in design.radii:
+    if design.video is not None and design.video.radius not in design.radii:
         raise SoftcellError(f"the video's radius {design.video.radius:g} cm is not among the "
                             f"design's radii {list(design.radii)}")
     if workers is not None and workers < 1:
@@ -226,8 +228,10 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     say = log or (lambda _: None)
     options = {"discard": design.discard}
 
+    total = 5 if design.video is None else 6
+
     def step(name: str, what: str):
-        say(f"[{len(outcome.steps) + 1}/7] {what}")
+        say(f"[{len(outcome.steps) + 1}/{total}] {what}")
         return _Timer(outcome.steps, name)
     with contextlib.ExitStack() as stack:
         # One cluster for both ensembles: each worker compiles its steppers once.
@@ -247,19 +251,22 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
         write_dataset(analysis, out / "analysis.nc")
         free_analysis = analyze(open_dataset(out / "free_bot"), options)
         write_dataset(free_analysis, out / "free_bot_analysis.nc")
-    with step("video", f"rendering, tracking and analysing {design.video.span:g} s at "
-              f"R = {design.video.radius:g} cm"):
-        task = next(t for t in plan(_config(design), out / "simulations", realizations=1,
-                                    seed=seed) if t.values["radius"] == design.video.radius)
-        video = experimental_pipeline(Path(task.path), out / "video", design.video,
-                                      discard=design.discard, seed=seed, progress=progress)
-        video["source"] = str(Path(task.path).relative_to(out))
-        outcome.notes.extend(video.pop("notes"))
+    video = tracked = None
+    if design.video is not None:
+        with step("video", f"rendering, tracking and analysing {design.video.span:g} s at "
+                  f"R = {design.video.radius:g} cm"):
+            task = next(t for t in plan(_config(design), out / "simulations", realizations=1,
+                                        seed=seed) if t.values["radius"] == design.video.radius)
+            video = experimental_pipeline(Path(task.path), out / "video", design.video,
+                                          discard=design.discard, seed=seed, progress=progress)
+            video["source"] = str(Path(task.path).relative_to(out))
+            outcome.notes.extend(video.pop("notes"))
+        tracked = read_dataset(out / "video" / "tracked_analysis.nc")
     with step("figures", "drawing the figures"):
         figures = make_figures(read_dataset(out / "analysis.nc"), out / "figures",
                                simulations=open_dataset(out / "simulations", chunks={}),
                                free_bot=read_dataset(out / "free_bot_analysis.nc"),
-                               tracked=read_dataset(out / "video" / "tracked_analysis.nc"))
+                               tracked=tracked)
         outcome.notes.extend(f"{name} not drawn: {why}" for name, why in
                              figures.skipped.items())
     with step("report", "writing the report"):
