@@ -346,6 +346,100 @@ def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.set_defaults(func=_cmd_study)
 
 
+def _numbers(flag: str, raw: str | None) -> list[float] | None:
+    if raw is None:
+        return None
+    try:
+        return [float(v) for v in raw.split(",") if v.strip()]
+    except ValueError:
+        raise SoftcellError(f"{flag} {raw!r} is not a comma-separated list of numbers") from None
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from softcell.io.files import check_output
+    from softcell.workflows.calibrate import (
+        calibrate_bending,
+        calibrate_friction,
+        write_calibration,
+    )
+
+    radius = _numbers("--radius", args.radius)
+    ipr, ipr_error = _numbers("--ipr", args.ipr), _numbers("--ipr-error", args.ipr_error)
+    if args.push_speed is None and ipr is None:
+        raise SoftcellError("nothing to calibrate: give --push-speed V (for gamma_mem) and/or "
+                            "--ipr I1,I2,... (for k), with --radius")
+    if args.push_speed is not None and ipr is not None and len(radius) != 1 + len(ipr):
+        raise SoftcellError(f"--radius has {len(radius)} value(s): with both calibrations give "
+                            "the push's radius first, then one radius per IPR value")
+    if args.output is not None:
+        check_output(args.output, "report", overwrite=args.overwrite,
+                     inputs=[args.config] if args.config else [])
+    config = load_config(args.config) if args.config else RunConfig()
+    workers = args.workers or 1
+    options = {"seed": args.seed, "workers": workers, "log": None if args.quiet else _note}
+    results = []
+    if args.push_speed is not None:
+        push_radius, radius = radius[0], radius[1:]
+        if ipr is None and radius:
+            raise SoftcellError("--push-speed calibrates at one radius: give one --radius")
+        found = calibrate_friction(
+            args.push_speed, push_radius, config=config,
+            push_speed_error=args.push_speed_error or 0.0,
+            **_given(realizations=args.realizations, duration=args.duration,
+                     settle=args.settle), **options)
+        print(found.summary())
+        results.append(found)
+        config = config.updated(parameters={"membrane_friction": found.value})
+    if ipr is not None:
+        found = calibrate_bending(ipr, radius, config=config, ipr_error=ipr_error,
+                                  **_given(realizations=args.realizations,
+                                           duration=args.duration, settle=args.settle),
+                                  **options)
+        print(found.summary())
+        results.append(found)
+    if not (args.push_speed_error or ipr_error):
+        print("(uncertainty: the simulations' spread across realizations and the search's "
+              "tolerance; give --push-speed-error / --ipr-error to add the measurements')")
+    if args.output is not None:
+        print(f"written: {write_calibration(results, args.output, config)}")
+    return 0
+
+
+def _given(**values: Any) -> dict[str, Any]:
+    return {k: v for k, v in values.items() if v is not None}
+
+
+def _add_calibrate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    p.add_argument("config", nargs="?", type=Path,
+                   help="TOML configuration: every other parameter and the components")
+    p.add_argument("--push-speed", type=float, metavar="V",
+                   help="measured time-averaged GC speed of a constantly pushed cell (cm/s): "
+                        "calibrates gamma_mem")
+    p.add_argument("--push-speed-error", type=float, metavar="DV",
+                   help="its standard error (cm/s)")
+    p.add_argument("--ipr", metavar="I1,I2,...",
+                   help="measured time-averaged shape index P / sqrt(A) at each radius: "
+                        "calibrates k")
+    p.add_argument("--ipr-error", metavar="E1,E2,...", help="their standard errors")
+    p.add_argument("--radius", required=strict, metavar="R1,R2,...",
+                   help="radii (cm): the push's, then one per IPR value")
+    p.add_argument("--realizations", type=int,
+                   help="realizations per evaluation and radius (default 2 for the push, 4 "
+                        "for the IPR)")
+    p.add_argument("--duration", type=float,
+                   help="simulated seconds per realization (default 15 for the push, 120 for "
+                        "the IPR)")
+    p.add_argument("--settle", type=float,
+                   help="seconds left out before averaging (default 5 for the push, 15 for "
+                        "the IPR)")
+    p.add_argument("--seed", type=int, default=0, help="root seed (every evaluation uses it)")
+    p.add_argument("--workers", type=int, help="local worker processes (default 1)")
+    p.add_argument("-o", "--output", type=Path, help="also write the results as JSON")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing JSON file")
+    p.add_argument("--quiet", action="store_true", help="no line per evaluation")
+    p.set_defaults(func=_cmd_calibrate)
+
+
 def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, help=workers_help)
@@ -567,6 +661,8 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
                "the paper's model", _add_beyond),
     "study": ("'study sensitivity': which of the paper's findings its unknowns decide, one "
               "unknown at a time", _add_study),
+    "calibrate": ("gamma_mem from a pushed cell's speed, k from the mean IPR, as the paper "
+                  "calibrated them", _add_calibrate),
     "cache": ("the compiled-model cache: where it is, what it holds; 'cache clear' empties it",
               _add_cache),
 }

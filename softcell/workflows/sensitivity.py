@@ -153,27 +153,32 @@ def crossing(radii: np.ndarray, ratio: np.ndarray, level: float) -> float:
     return float(r0 + (level - q0) * (r1 - r0) / (q1 - q0))
 
 
-def _length_deviation(sims, params: dict[str, Any], every: int = 10) -> np.ndarray:
-    """Largest |L / L_eq - 1| per radius over every realization and every ``every``-th
-    sample, L the membrane's length from its stored nodes (spectrally: the stored shape is
-    band-limited below their Nyquist mode) and L_eq that of the force-free circle."""
+def membrane_measures(sims, params: dict[str, Any], keep: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """From a sweep's stored membranes: the mean IPR per (radius, realization) over the
+    samples ``keep`` (the smooth curve through the nodes, which sample a band-limited shape),
+    and the largest |L / L_eq - 1| per radius over every realization and sample, L the
+    membrane's length (spectrally) and L_eq that of the force-free circle."""
+    from softcell.core.analysis.series import shape_index
     from softcell.core.engine.state import equilibrium_radius
     from softcell.core.params import Parameters
     from softcell.core.plugin.registry import get_registry
 
     specs = get_registry().parameter_specs().values()
-    out = []
+    ipr, deviation = [], []
     for i, radius in enumerate(np.asarray(sims["radius"].values, dtype=float)):
-        point = sims.isel(radius=i, time=slice(None, None, every))
-        z = (np.asarray(point["membrane_x"].values)
-             + 1j * np.asarray(point["membrane_y"].values))  # [realization, time, node]
+        point = sims.isel(radius=i)
+        x = np.asarray(point["membrane_x"].values)  # [realization, time, node]
+        y = np.asarray(point["membrane_y"].values)
+        ipr.append(shape_index(x[:, keep], y[:, keep], band_limited=True).mean(axis=-1))
+        z = x + 1j * y
         n = z.shape[-1]
         k = np.fft.fftfreq(n, 1.0 / n)
-        dz = np.fft.ifft(1j * k * np.fft.fft(z, axis=-1), axis=-1)
-        length = 2 * np.pi * np.abs(dz).mean(axis=-1)
+        length = 2 * np.pi * np.abs(np.fft.ifft(1j * k * np.fft.fft(z, axis=-1),
+                                                axis=-1)).mean(axis=-1)
         r_eq = equilibrium_radius(Parameters({**params, "radius": float(radius)}, specs))
-        out.append(float(np.nanmax(np.abs(length / (2 * np.pi * r_eq) - 1))))
-    return np.asarray(out)
+        deviation.append(float(np.nanmax(np.abs(length / (2 * np.pi * r_eq) - 1))))
+    return np.asarray(ipr), np.asarray(deviation)
 
 
 def run_speed(free_bot) -> float:
@@ -195,11 +200,11 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
 
     Returns a JSON-ready dict: per radius (cm) the pooled value and its standard error
     across realizations of <tau_g> (s), the bot-cell GC distance over R (1), the mean IPR
-    (1) and the bot's MSD over the free bot's at :data:`SHORT_LAG` (1); the radii where the
-    GC distance ratio crosses the regime thresholds (cm); the paper's stated facts (the free
-    bot's median go speed, cm/s; the largest relative deviation of the membrane's length
-    from its equilibrium value; the regimes at 4 and 12 cm); and every finding's verdict
-    and measured text.
+    (1; of the smooth curve through the stored nodes) and the bot's MSD over the free bot's
+    at :data:`SHORT_LAG` (1); the radii where the GC distance ratio crosses the regime
+    thresholds (cm); the paper's stated facts (the free bot's median speed in its runs,
+    cm/s; the largest relative deviation of the membrane's length from its equilibrium
+    value; the regimes at 4 and 12 cm); and every finding's verdict and measured text.
     """
     from softcell.core.analysis.options import analysis_options
     from softcell.core.analysis.pipeline import LagPlan
@@ -221,7 +226,6 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     labels = np.asarray(analysis["stopgo_label"].sel(body="cell").values)
     tau_g = np.array([[durations(labels[i, r], time, only).mean(GO)
                        for r in range(labels.shape[1])] for i in range(labels.shape[0])])
-    ipr = np.nanmean(np.asarray(analysis["ipr"].values, dtype=float), axis=-1)
     keep = np.asarray(sims["time"].values) >= float(sims["time"].values[0]) + opts["discard"]
     gap = np.hypot(np.asarray(sims["bot_x"].values) - np.asarray(sims["cell_x"].values),
                    np.asarray(sims["bot_y"].values) - np.asarray(sims["cell_y"].values))
@@ -234,6 +238,7 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     bot_pooled = np.asarray(analysis["msd"].sel(body="bot").isel(lag=k).values)
 
     params = json.loads(sims.attrs["softcell_parameters"])
+    ipr, deviation = membrane_measures(sims, params, keep)
     regime = np.asarray(analysis["regime"].values, dtype=int)
     findings = json.loads((folder / "findings.json").read_text())["findings"]
 
@@ -259,13 +264,13 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
             np.asarray(analysis["mean_go_duration"].sel(body="cell").values), tau_g),
         "gc_distance_ratio": series(
             np.asarray(analysis["gc_distance_ratio"].values), gc_ratio),
-        "ipr": series(np.asarray(analysis["ipr_mean"].values), ipr),
+        "ipr": series(ipr.mean(axis=-1), ipr),
         "bot_msd_ratio": series(bot_pooled / free_short, bot_each / free_short),
         "short_lag": float(lag[k]),
         "regime": [REGIME_NAMES[int(g)] for g in regime],
         "regime_bounds": bounds,
         "facts": {"free_bot_run_speed": run_speed(open_dataset(folder / "free_bot")),
-                  "length_deviation": float(_length_deviation(sims, params).max()),
+                  "length_deviation": float(deviation.max()),
                   "regime_at_4": at(4.0), "regime_at_12": at(12.0)},
         "verdicts": {f["topic"]: f["verdict"] for f in findings},
         "measured": {f["topic"]: f["measured"] for f in findings},
@@ -406,8 +411,7 @@ def _verdicts_figure(folder: Path, variants: Sequence[Variant],
                       for v in variants] for t in topics], dtype=float)
     fig, ax = plt.subplots(figsize=(1.0 + 0.75 * len(variants), 0.9 + 0.42 * len(topics)),
                            constrained_layout=True)
-    cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"])
-    cmap.set_bad("#dddddd")
+    cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
     ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")
     reference = grid[:, :1]
     for (i, j), code in np.ndenumerate(grid):
@@ -431,10 +435,10 @@ def _row(cells) -> str:
     return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
-def _pm(value: float, sem: float, digits: int) -> str:
+def _pm(value: float, sem: float, spec: str) -> str:
     if not np.isfinite(value):
         return "-"
-    return f"{value:.{digits}f}" + (f" ± {sem:.{digits}f}" if np.isfinite(sem) else "")
+    return f"{value:{spec}}" + (f" ± {sem:{spec}}" if np.isfinite(sem) else "")
 
 
 def _markdown(variants, results, figures, seed: int, base: Design) -> str:
@@ -486,13 +490,13 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
               f"Pooled value ± standard error across the {base.realizations} realizations "
               "(common random numbers: "
               "a difference between variants is smaller than the error bars suggest).", ""]
-    tables = (("mean_go_duration", "<tau_g> of the cell (s)", 3, 0.0),
+    tables = (("mean_go_duration", "<tau_g> of the cell (s)", ".3f", 0.0),
               ("gc_distance_ratio", "bot-cell GC distance / R (coupled <= 0.35, decoupled "
-               ">= 0.5)", 2, 0.0),
-              ("ipr", "mean IPR minus a circle's 2 sqrt(pi) = 3.5449", 4,
+               ">= 0.5)", ".2f", 0.0),
+              ("ipr", "mean IPR minus a circle's 2 sqrt(pi) = 3.5449", ".1e",
                2 * math.sqrt(math.pi)),
               ("bot_msd_ratio", f"bot MSD in the membrane / free bot's, at lag "
-               f"{ref['short_lag']:g} s", 2, 0.0))
+               f"{ref['short_lag']:g} s", ".2f", 0.0))
     for key, title, digits, offset in tables:
         lines += [f"### {title}", "", _row(["variant", *[f"R = {r:g}" for r in radii]]),
                   _row(["---"] * (1 + len(radii)))]
@@ -509,8 +513,9 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
               _row(["---"] * 4)]
     for v in variants:
         b = results[v.name]["regime_bounds"]
-        lines.append(_row([v.name, _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"], 1),
-                           _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], 1),
+        lines.append(_row([v.name, _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"],
+                                       ".1f"),
+                           _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".1f"),
                            ", ".join(g[:3] for g in results[v.name]["regime"])]))
     lines += ["", *[f"![{f}](figures/{f})" for f in figures], ""]
     return "\n".join(lines) + "\n"

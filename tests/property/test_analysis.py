@@ -193,6 +193,13 @@ def test_shape_index_of_known_shapes():
     ellipse = shape_index(a * np.cos(t), b * np.sin(t))
     assert ellipse == pytest.approx(4 * a * ellipe(1 - b**2 / a**2) / np.sqrt(np.pi * a * b),
                                     rel=1e-7)
+    # A band-limited curve from few nodes: the smooth curve's IPR, not its polygon's.
+    for n in (16, 64):
+        t = 2 * np.pi * np.arange(n) / n
+        smooth = shape_index(8.3 * np.cos(t) + 3, 7.6 * np.sin(t) - 1, band_limited=True)
+        exact = 4 * 8.3 * ellipe(1 - 7.6**2 / 8.3**2) / np.sqrt(np.pi * 8.3 * 7.6)
+        assert smooth == pytest.approx(exact, abs=1e-12)
+        assert shape_index(8.3 * np.cos(t), 7.6 * np.sin(t)) - exact > 1e-3  # the polygon's
     _, _, cx, cy = polygon_area_perimeter_centroid(np.array([0.0, 4, 4, 0, 0]) + 1e4,
                                                    np.array([0.0, 0, 2, 2, 1]))
     assert (cx, cy) == (pytest.approx(1e4 + 2), pytest.approx(1.0))

@@ -55,11 +55,13 @@ class SoftcellAccessor:
                             attrs={"units": "cm s-1", "long_name": f"{body} speed"})
 
     def ipr(self) -> xr.DataArray:
-        """Shape index P / sqrt(A) of the membrane per sample (2 sqrt(pi) for a circle)."""
+        """Shape index P / sqrt(A) of the membrane per sample (2 sqrt(pi) for a circle): of
+        the smooth curve through a simulation's nodes, of the polygon of a tracked contour."""
         from softcell.core.analysis.series import shape_index
 
         mx = self._ds["membrane_x"]
-        values = shape_index(mx.values, self._ds["membrane_y"].values)
+        smooth = self._ds.attrs.get("softcell_origin", "simulation") == "simulation"
+        values = shape_index(mx.values, self._ds["membrane_y"].values, band_limited=smooth)
         dims = mx.dims[:-1]
         return xr.DataArray(values, dims=dims, coords={d: mx[d] for d in dims if d in mx.coords},
                             name="ipr", attrs={"units": "1", "long_name": "shape index"})

@@ -282,7 +282,8 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
     mx = sel["membrane_x"].transpose("realization", "time", "node")
     my = sel["membrane_y"].transpose("realization", "time", "node")
     for r in range(res.ipr.shape[1]):
-        res.ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep])
+        res.ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep],
+                                    band_limited=setup.origin == "simulation")
     (cx, cy), (bx, by) = pos["cell"], pos["bot"]
     with np.errstate(invalid="ignore"):
         res.gc_distance[i] = np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(
