@@ -514,8 +514,8 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
     for v in variants:
         b = results[v.name]["regime_bounds"]
         lines.append(_row([v.name, _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"],
-                                       ".1f"),
-                           _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".1f"),
+                                       ".2f"),
+                           _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".2f"),
                            ", ".join(g[:3] for g in results[v.name]["regime"])]))
     lines += ["", *[f"![{f}](figures/{f})" for f in figures], ""]
     return "\n".join(lines) + "\n"
