@@ -307,12 +307,16 @@ class Parameters(Mapping[str, Value]):
         """Unstretched membrane length l0 = 2 pi R (cm)."""
         return 2.0 * math.pi * float(self._values["radius"])
 
-    def to_attrs(self) -> dict[str, str]:
-        """File attributes: ``softcell_parameters`` (JSON ``{name: value}``) and
-        ``softcell_parameter_units`` (JSON ``{name: unit}``)."""
+    def to_attrs(self) -> dict[str, Any]:
+        """File attributes: ``softcell_parameters`` (JSON ``{name: value}``, what softcell
+        reads back), ``softcell_parameter_units`` (JSON ``{name: unit}``), and each parameter
+        on its own as ``parameter_<name>`` (a number or text, so that ``ncdump -h`` and a
+        plain ``xr.open_dataset`` show it; booleans as 0/1)."""
+        each = parameter_attrs(self._values)
         return {
             "softcell_parameters": json.dumps(self._values),
             "softcell_parameter_units": json.dumps({k: s.unit for k, s in self.specs.items()}),
+            **each,
         }
 
     @classmethod
@@ -335,6 +339,27 @@ def merge_specs(*groups: Iterable[ParameterSpec]) -> dict[str, ParameterSpec]:
                               f"{merged[spec.name]} and {spec}")
         merged[spec.name] = spec
     return merged
+
+
+#: Prefix of the attributes that repeat each parameter on its own.
+PARAMETER_ATTR_PREFIX = "parameter_"
+
+
+def parameter_attrs(values: Mapping[str, Any]) -> dict[str, Any]:
+    """Each parameter as its own file attribute ``parameter_<name>``: a number, a text, or
+    the list of a swept parameter's values (booleans as 0/1; unset values left out)."""
+    out: dict[str, Any] = {}
+    for name, value in values.items():
+        if value is None:
+            continue
+        if isinstance(value, list | tuple):
+            value = [int(v) if isinstance(v, bool) else v for v in value]
+            if not all(isinstance(v, int | float) for v in value):
+                value = json.dumps(value)
+        elif isinstance(value, bool):
+            value = int(value)
+        out[f"{PARAMETER_ATTR_PREFIX}{name}"] = value
+    return out
 
 
 def expand_sweep(values: Mapping[str, Any], extra_specs: Sequence[ParameterSpec] = ()

@@ -126,8 +126,10 @@ def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
-                   components: dict[str, object], extra_attrs: dict[str, object] | None = None):
-    """The simulation Dataset (schema of :mod:`softcell.core.schema`) of one realization."""
+                   components: dict[str, object], extra_attrs: dict[str, object] | None = None,
+                   scalar_coords: tuple[str, ...] = ("radius",)):
+    """The simulation Dataset (schema of :mod:`softcell.core.schema`) of one realization;
+    the parameters ``scalar_coords`` are also its scalar coordinates."""
     # Imported here: the loop above needs no xarray (about 70 MiB), only the Dataset does.
     from softcell.core.schema import simulation_dataset
     from softcell.kernels.spectral import resample
@@ -144,4 +146,4 @@ def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
         cell_x=cell.real[None], cell_y=cell.imag[None], bot_x=record.pose[None, :, 0],
         bot_y=record.pose[None, :, 1], bot_angle=record.pose[None, :, 2],
         bot_phase=record.phase[None], parameters=model.params, seed=seed,
-        components=components, extra_attrs=extra_attrs)
+        components=components, extra_attrs=extra_attrs, scalar_coords=scalar_coords)

@@ -9,7 +9,7 @@ attribute. :func:`simulation_dataset` builds a conforming Dataset from arrays.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -247,7 +247,8 @@ def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
                        bot_phase: np.ndarray, parameters: Any, seed: int,
                        components: Mapping[str, Any],
                        cell_x: np.ndarray | None = None, cell_y: np.ndarray | None = None,
-                       extra_attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+                       extra_attrs: Mapping[str, Any] | None = None,
+                       scalar_coords: Sequence[str] = ("radius",)) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
     Parameters
@@ -270,6 +271,9 @@ def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
         Component names by kind, e.g. ``{"energy_terms": [...], "integrator": "..."}``.
     cell_x, cell_y : float64[R, T], optional
         Geometric center (cm); by default the algebraic mean of the membrane points.
+    scalar_coords : sequence of str
+        Parameters also stored as scalar coordinates with their units and long names (the
+        swept ones: a sweep's files then combine with plain xarray along them).
     """
     if cell_x is None:
         cell_x = membrane_x.mean(axis=-1)
@@ -287,6 +291,9 @@ def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
         "time": ("time", np.asarray(time, dtype=np.float64), COORDINATES["time"].cf_attrs()),
         "node": ("node", np.arange(n_nodes, dtype=np.int64), COORDINATES["node"].cf_attrs()),
     }
+    for name in dict.fromkeys(scalar_coords):
+        spec = parameters.specs[name]
+        coords[name] = ((), parameters[name], {"units": spec.unit, "long_name": spec.long_name})
     attrs = global_attrs("simulation", "soft robotic cell simulation",
                          f"softcell {__version__} simulation",
                          softcell_seed=int(seed),

@@ -33,8 +33,10 @@ from softcell.errors import SoftcellError
 
 #: Relative step in the parameter for the slope behind the uncertainty.
 SLOPE_STEP = 0.03
-#: Tolerance of the searches on the log of the parameter (a relative tolerance).
+#: Tolerance of the searches on the log of the parameter (a relative tolerance): the root
+#: searches' and the least-squares search's (its every evaluation costs as much as a root's).
 ROOT_TOLERANCE = 1e-4
+FIT_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -311,7 +313,7 @@ def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
                 return float(np.sum((residual(x) / weights(x)) ** 2))
 
             log_k = float(minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                                          options={"xatol": ROOT_TOLERANCE}).x)
+                                          options={"xatol": FIT_TOLERANCE}).x)
             if min(log_k - lo, hi - log_k) < 0.01:
                 raise SoftcellError(f"the best k lies at the edge of [{k0 / 30:.3g}, "
                                     f"{k0 * 30:.3g}] N cm2: the IPR values are out of reach")
@@ -321,7 +323,7 @@ def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
         err = np.hypot(np.asarray(errors), [_sem(v) for v in at])
         information = float(np.sum((slope[err > 0] / err[err > 0]) ** 2))
         sigma_log = math.hypot(1.0 / math.sqrt(information) if information > 0 else 0.0,
-                               ROOT_TOLERANCE)
+                               ROOT_TOLERANCE if len(radius) == 1 else FIT_TOLERANCE)
         k = math.exp(log_k)
         return Calibration(
             "bending_stiffness", "N cm2", k, k * sigma_log, "time-averaged IPR", "1",

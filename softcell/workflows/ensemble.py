@@ -49,6 +49,7 @@ class Task:
     seed: int
     membrane: bool
     path: str
+    swept: tuple[str, ...] = ("radius",)  # stored as scalar coordinates too
 
     @property
     def name(self) -> str:
@@ -184,7 +185,8 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
     ds = record_dataset(record, model, realization=task.realization, seed=task.seed,
                         components=task.stored_components,
                         extra_attrs={"softcell_point": task.point,
-                                     "softcell_spawn_key": f"{task.point},{task.realization}"})
+                                     "softcell_spawn_key": f"{task.point},{task.realization}"},
+                        scalar_coords=task.swept)
     write_dataset(ds, path)
     checkpoint.unlink(missing_ok=True)
     return str(path)
@@ -211,11 +213,13 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
     for _, params in points:
         check_run(params)
         integrator.check(params)
+    swept = tuple(dict.fromkeys(["radius", *(k for k, v in config.parameters.items()
+                                             if isinstance(v, list | tuple))]))
     tasks = []
     for p, (_, params) in enumerate(points):
         for r in range(realizations):
             tasks.append(Task(p, r, dict(params.given), dict(config.components), seed, membrane,
-                              str(out / f"point{p:03d}_realization{r:04d}.nc")))
+                              str(out / f"point{p:03d}_realization{r:04d}.nc"), swept))
     return tasks
 
 

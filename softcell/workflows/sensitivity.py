@@ -409,7 +409,7 @@ def _verdicts_figure(folder: Path, variants: Sequence[Variant],
     topics = list(results[variants[0].name]["verdicts"])
     grid = np.array([[_VERDICT_CODE.get(results[v.name]["verdicts"].get(t, ""), np.nan)
                       for v in variants] for t in topics], dtype=float)
-    fig, ax = plt.subplots(figsize=(1.0 + 0.75 * len(variants), 0.9 + 0.42 * len(topics)),
+    fig, ax = plt.subplots(figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
                            constrained_layout=True)
     cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
     ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")

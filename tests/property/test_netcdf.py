@@ -91,7 +91,7 @@ def test_directory_of_a_sweep_opens_as_one_dataset(tmp_path):
     assert (ds["bot_phase"].sel(radius=4.0).values[:, 6:] == -1).all()
     assert ds["bot_phase"].dtype == np.int8
     single = read_dataset(tmp_path / "r8.0_1.nc")
-    xr.testing.assert_equal(ds["bot_x"].sel(radius=8.0, realization=1).drop_vars("radius"),
+    xr.testing.assert_equal(ds["bot_x"].sel(radius=8.0, realization=1),
                             single["bot_x"].isel(realization=0))
     assert not problems(ds)
 

@@ -29,6 +29,7 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
+from softcell.core.params import parameter_attrs
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
 from softcell.errors import SoftcellError
 
@@ -442,5 +443,6 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
         **{k: v for k, v in ds.attrs.items() if k in (
             "softcell_parameters", "softcell_parameter_units", "softcell_seed",
             "softcell_components", "softcell_swept_parameters")},
+        **parameter_attrs(json.loads(ds.attrs.get("softcell_parameters", "{}"))),
     }
     return out
