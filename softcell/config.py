@@ -33,3 +33,16 @@ ELLIPSE_ITERATIONS = 200
 
 #: Wall seconds between checkpoints of a running realization (``--checkpoint-every``).
 CHECKPOINT_EVERY = 60.0
+
+
+def progress_bar_class():
+    """tqdm's bar class for this session: a notebook's widget where Jupyter can draw one, the
+    console's otherwise (without the warning tqdm gives when ipywidgets is missing)."""
+    import warnings
+
+    from tqdm import TqdmWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TqdmWarning)
+        from tqdm.auto import tqdm
+    return tqdm

@@ -253,7 +253,8 @@ def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
 
     monkeypatch.setattr(ensemble, "__version__", "99.0")
     assert _simulate(sweep) == 2
-    assert "softcell version = 0.1.0 there, 99.0 in this request" in capsys.readouterr().err
+    assert f"softcell version = {softcell.__version__} there, 99.0 in this request" in (
+        capsys.readouterr().err)
 
 
 def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path,

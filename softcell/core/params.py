@@ -36,7 +36,7 @@ class ParameterSpec:
         Identifier used in code, TOML files, file attributes and as ``--name-with-dashes``.
     default : float, int, str or None
         Default value in ``unit``; ``None`` means the default is derived from other
-        parameters (see :func:`_derived_default`).
+        parameters (see ``_derived_default``).
     unit : str
         UDUNITS-2 unit string (``"1"`` for dimensionless).
     long_name : str
@@ -221,7 +221,7 @@ class Parameters(Mapping[str, Value]):
     values : mapping, optional
         Values that differ from the defaults, by parameter name, in the declared units.
     extra_specs : iterable of ParameterSpec, optional
-        Parameters declared by components beyond :data:`MODEL_PARAMETERS`. A name in
+        Parameters declared by components beyond ``MODEL_PARAMETERS``. A name in
         ``values`` declared by neither is looked up among the parameters of the installed
         components (the plugin registry, built on first use), so
         ``Parameters({"pressure": 2e-4})`` works once the plugin declaring it is installed.
@@ -296,7 +296,8 @@ class Parameters(Mapping[str, Value]):
         return dict(self._given)
 
     def replace(self, **changes: Any) -> Parameters:
-        """A new validated point with some values changed (derived defaults recomputed)."""
+        """A new validated point with some values changed (derived defaults recomputed;
+        values in each parameter's unit, ``specs[name].unit``)."""
         return Parameters({**self._given, **changes}, self._extra_specs())
 
     def _extra_specs(self) -> list[ParameterSpec]:
@@ -322,7 +323,8 @@ class Parameters(Mapping[str, Value]):
     @classmethod
     def from_attrs(cls, attrs: Mapping[str, Any],
                    extra_specs: Iterable[ParameterSpec] = ()) -> Parameters:
-        """Rebuild the parameters stored by :meth:`to_attrs` in a file's attributes."""
+        """Rebuild the parameters stored by :meth:`to_attrs` in a file's attributes (values
+        in the units of ``softcell_parameter_units``)."""
         try:
             values = json.loads(attrs["softcell_parameters"])
         except KeyError:

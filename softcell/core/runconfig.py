@@ -51,14 +51,16 @@ class RunConfig:
 
     def updated(self, parameters: Mapping[str, Any] = (), components: Mapping[str, Any] = (),
                 run: Mapping[str, Any] = ()) -> RunConfig:
-        """A copy with some entries replaced (command-line flags over a file)."""
+        """A copy with some entries replaced (command-line flags over a file); parameter
+        values in the units of ``softcell params``."""
         return dataclasses.replace(self, parameters={**self.parameters, **dict(parameters)},
                                    components={**self.components, **dict(components)},
                                    run={**self.run, **dict(run)})
 
     def check_components(self) -> None:
         """Raise :class:`ConfigError` unless every component named exists in the registry
-        (with a suggestion for a misspelt one) and no energy term is named twice."""
+        (with a suggestion for a misspelt one) and no energy term is named twice (names
+        only: no units)."""
         from softcell.core.plugin.registry import get_registry
 
         registry = get_registry()

@@ -221,7 +221,8 @@ def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
 
 
 def validate(ds: xr.Dataset) -> xr.Dataset:
-    """Return ``ds`` unchanged if it follows the schema.
+    """Return ``ds`` unchanged if it follows the schema (which includes each variable's
+    CF ``units``: cm, s, rad, or 1).
 
     Raises
     ------

@@ -46,7 +46,8 @@ TEXT_ENCODING = "S1"
 
 
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: int = 4) -> Path:
-    """Write ``ds`` to ``path`` as compressed NetCDF-4, atomically.
+    """Write ``ds`` to ``path`` as compressed NetCDF-4, atomically (no units of its own:
+    each variable's CF ``units`` attribute is written as it is).
 
     Parameters
     ----------
@@ -64,7 +65,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
 
     Raises
     ------
-    StorageError
+    softcell.io.files.StorageError
         For a full disk, a read-only file system or a missing permission (one line); nothing
         is left under ``path`` nor beside it.
     """
@@ -114,7 +115,8 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
 
 
 def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
-    """Read one NetCDF file fully into memory and close it."""
+    """Read one NetCDF file fully into memory and close it (no units of its own: every
+    variable keeps the CF ``units`` attribute it was written with)."""
     path = Path(path)
     if not path.is_file():
         raise SoftcellError(f"no such file: {path}")

@@ -128,7 +128,9 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
     frame = _frame_for(mx, my, span, px_per_cm, size)
     rng = np.random.default_rng(seed)
     background = _background(frame, illumination)
-    from tqdm.auto import tqdm
+    from softcell.config import progress_bar_class
+
+    tqdm = progress_bar_class()
 
     frame_bytes = DISK_CHECK_EVERY * 3 * frame.width * frame.height  # uncompressed, at most
     with atomic_write(path) as tmp:

@@ -105,7 +105,7 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     Two geometries: a linear frame (``px_per_cm`` or ``arena_size``, and ``origin``: a camera
     exactly above, no lens distortion), or a camera calibrated from the plate seen in the
     first frame (``plate_size``: perspective, radial distortion and parallax, see
-    :mod:`softcell.core.camera`; plate coordinates, origin at the plate corner seen at the
+    ``softcell.core.camera``; plate coordinates, origin at the plate corner seen at the
     lower left).
 
     Parameters
@@ -279,7 +279,9 @@ def _track_frames(frames: Iterator[np.ndarray], tracker: Tracker, rate: float,
                   draw: Callable[[np.ndarray, Tracker, tuple], None] | None = None
                   ) -> TrackResult:
     """Run the tracker over every frame; frame k is at time k / rate (s)."""
-    from tqdm.auto import tqdm
+    from softcell.config import progress_bar_class
+
+    tqdm = progress_bar_class()
 
     result = TrackResult()
     with tqdm(total=total, disable=not progress, desc="track", unit="frame") as bar:

@@ -4,7 +4,7 @@ Every random stream comes from one root seed: realization r of parameter point p
 ``SeedSequence(seed, spawn_key=(p, r))``, so results do not depend on the number of workers or
 their order. Each (point, realization) is written atomically to its own file; a finished file
 is reused when the same request runs again (and only then: a file made with any other
-setting stops the run, :func:`resume_plan`), and a long realization checkpoints its state
+setting stops the run, ``resume_plan``), and a long realization checkpoints its state
 (``.<name>.ckpt.npz``) so that a killed or interrupted run resumes to the same bytes.
 
 Beyond one process the realizations run on a dask.distributed cluster, one task each: a local
@@ -367,8 +367,11 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
              log: Callable[[str], None] | None = None) -> list[Path]:
     """Run an ensemble: every parameter point of ``config`` x ``realizations``.
 
+    Parameters take the units of ``softcell params`` (cm, s, rad, N); each file stores
+    positions in cm, angles in rad and times in s, with CF ``units`` attributes.
+
     Finished files already in ``out`` are kept when they match the request exactly (see
-    :func:`resume_plan`); a mismatch stops the run before anything is computed.
+    ``resume_plan``); a mismatch stops the run before anything is computed.
 
     Parameters
     ----------
@@ -395,10 +398,12 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
     ------
     SoftcellError
         For any bad request, before anything is computed or any directory created.
-    Interrupted
+    softcell.errors.Interrupted
         On Ctrl-C, once the running realizations' checkpoints are saved.
     """
-    from tqdm.auto import tqdm
+    from softcell.config import progress_bar_class
+
+    tqdm = progress_bar_class()
 
     from softcell.io.files import check_output, check_writable, remove
 

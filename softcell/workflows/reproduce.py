@@ -1,6 +1,6 @@
 """The paper end to end: simulate, analyze, render and track, draw the figures, write a report.
 
-:func:`reproduce` runs a :class:`Design` (:data:`QUICK` or :data:`FULL`) into one results
+:func:`reproduce` runs a :class:`Design` (``QUICK`` or ``FULL``) into one results
 directory::
 
     simulations/            one file per (radius, realization)     softcell simulate
@@ -154,12 +154,15 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
               log: Callable[[str], None] | None = print) -> Outcome:
     """Run ``design`` into ``out``: simulations, analyses, the video pipeline, figures, report.
 
+    The design's durations and discard are in s, its radii in cm; every file it writes
+    carries its variables' units.
+
     Parameters
     ----------
     out : path-like
         Results directory (created; finished parts found there are kept).
     design : Design
-        :data:`QUICK` or :data:`FULL`, or your own.
+        ``QUICK`` or ``FULL``, or your own.
     seed : int
         Root seed of every random stream.
     workers : int, optional

@@ -341,7 +341,7 @@ def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray
 
 def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any],
                       edges: np.ndarray) -> xr.Dataset:
-    """The analysis Dataset of :data:`softcell.core.schema.ANALYSIS_VARIABLES`, back on the
+    """The analysis Dataset of ``softcell.core.schema.ANALYSIS_VARIABLES``, back on the
     sweep's dims."""
     lead = setup.lead
     lead_shape = tuple(ds.sizes[d] for d in lead)
@@ -403,15 +403,15 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     ds : xarray.Dataset
         The softcell schema (positions in cm, time in s); a sweep adds leading dims.
     options : mapping, optional
-        Analysis options (:data:`softcell.core.analysis.options.ANALYSIS_OPTIONS`): discard
-        (s), fit windows (multiples of the mean go time), detector and threshold (cm/s), ...
+        Analysis options (``softcell.core.analysis.options.ANALYSIS_OPTIONS``; docs/analysis.md):
+        discard (s), fit windows (multiples of the mean go time), detector and threshold (cm/s), ...
     progress : bool
         Show a progress bar over sweep points.
 
     Returns
     -------
     xarray.Dataset
-        The analysis (:data:`softcell.core.schema.ANALYSIS_VARIABLES`), with CF attributes on
+        The analysis (``softcell.core.schema.ANALYSIS_VARIABLES``), with CF attributes on
         every variable and the options, the input's parameters, seed and components in the
         global attributes.
 
@@ -420,7 +420,9 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     SoftcellError
         Naming every variable the analysis needs that ``ds`` lacks, or a record too short.
     """
-    from tqdm.auto import tqdm
+    from softcell.config import progress_bar_class
+
+    tqdm = progress_bar_class()
 
     setup = _Setup(ds, options)
     res = _Results(setup, ds.sizes["realization"])

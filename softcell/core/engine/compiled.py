@@ -16,7 +16,7 @@ code (every Python file of its package), its distribution's version, and the ver
 softcell, numba, numpy and Python. A changed plugin gives a new key, hence a new entry; a
 stale entry is never read. Writers write to a temporary name and rename, so processes starting
 at once (dask workers) see either no file or a whole one; a corrupt entry (a truncated file,
-say) is removed and rebuilt with a :class:`~softcell.errors.CacheWarning`.
+say) is removed and rebuilt with a :class:`~softcell.plugin.CacheWarning`.
 
 Location: ``$SOFTCELL_CACHE_DIR``, else the user cache directory (``platformdirs``), under
 ``compiled/``.
@@ -351,7 +351,7 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
     module
         Loaded once per process and key. When a bound function cannot be identified (a
         closure, a function typed in a notebook), the module is compiled in memory instead,
-        with a :class:`~softcell.errors.CacheWarning` saying why.
+        with a :class:`~softcell.plugin.CacheWarning` saying why.
     """
     try:
         key = entry_key(source, bindings)

@@ -37,7 +37,7 @@ class Model:
         (:meth:`EnergyTerm.bot_kernel`; the arena's walls).
     protocol : DrivingProtocol
     partials : compiled function
-        Sum of the terms' partials kernels (see :func:`compose_partials`).
+        Sum of the terms' partials kernels (see ``compose_partials``).
     coefficients : tuple of float64 arrays
         One per term.
     drive : compiled function
@@ -53,7 +53,7 @@ class Model:
         not ``linear``, an integrator evaluates the force density
         f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at M points (the smallest power of
         two >= 8 Lc, at most N: 128), applies the law's kernel there and moves the modes by the
-        velocity's modes |k| <= Lc
+        velocity's modes ``|k| <= Lc``
         (``force_scale`` = 2 pi / l0, cm^-1).
     """
 

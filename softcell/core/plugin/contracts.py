@@ -42,7 +42,7 @@ class Component(ABC):
         One line, shown by ``softcell plugins``.
     parameters : tuple of ParameterSpec
         The parameters the component reads, each with default, unit and range. A component may
-        use parameters of the model catalogue (:data:`softcell.core.params.MODEL_PARAMETERS`)
+        use parameters of the model catalogue (:data:`softcell.plugin.MODEL_PARAMETERS`)
         by listing their specs, or declare new ones.
     """
 
@@ -51,7 +51,7 @@ class Component(ABC):
     description: ClassVar[str]
     parameters: ClassVar[tuple[ParameterSpec, ...]] = ()
     #: The compiled kernels of the contract: the method returning each, and the numba
-    #: signature the engine calls it with (checked by :func:`check_kernels` when a model is
+    #: signature the engine calls it with (checked by ``check_kernels`` when a model is
     #: built, before any time step).
     kernels: ClassVar[dict[str, str]] = {}
 
@@ -62,18 +62,21 @@ class Component(ABC):
     @classmethod
     def check(cls, params: Parameters) -> None:
         """Raise :class:`~softcell.errors.ParameterError` for a parameter set this component
-        cannot run with (beyond the per-parameter ranges). The default accepts everything."""
+        cannot run with (beyond the per-parameter ranges; values in their declared units).
+        The default accepts everything."""
         return None
 
     def coefficients(self) -> np.ndarray:
-        """The component's parameter values as a float64 array, in the order of ``parameters``
-        (the layout its compiled kernel receives). String parameters are not included."""
+        """The component's parameter values, each in its declared unit, as a float64 array
+        in the order of ``parameters`` (the layout its compiled kernel receives). String
+        parameters are not included."""
         return np.array([float(self.params[s.name]) for s in self.parameters if s.kind is not str],
                         dtype=np.float64)
 
     @classmethod
     def contract_problems(cls) -> list[str]:
-        """What is wrong with this class as a component (empty when it is well formed)."""
+        """What is wrong with this class as a component (empty when it is well formed; no
+        units)."""
         problems = []
         name = getattr(cls, "name", None)
         if not isinstance(name, str) or not _NAME.match(name):
@@ -109,7 +112,7 @@ class EnergyTerm(Component):
     #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
     couples_bot: ClassVar[bool] = False
     #: True if the density is a smooth function of gamma, gamma', gamma'' with no length
-    #: scale of its own (bending, tension): its force modes |k| <= Lc are then computed to
+    #: scale of its own (bending, tension): its force modes ``|k| <= Lc`` are then computed to
     #: rounding on a coarser grid, and integrators other than the explicit reference may do
     #: so (``rodas4``'s ``smooth_nodes``). False (the default) keeps the N collocation points,
     #: as a term with its own short length scale (the contact, lambda = 0.01 cm) needs.
@@ -133,7 +136,7 @@ class EnergyTerm(Component):
         ``x, y`` (cm), ``xp, yp`` (cm), ``xpp, ypp`` (cm): the curve and its first and second
         derivatives with respect to xi at the N points, float64[N]. ``pose``: float64[3], the
         bot's x, y (cm) and heading (rad). ``context``: float64[3], l0 (cm), the bot's semi-major
-        and semi-minor axes (cm). ``coefficients``: float64[:], from :meth:`coefficients`.
+        and semi-minor axes (cm). ``coefficients``: float64[:], from :meth:`Component.coefficients`.
         The kernel *adds* de/dx, de/dy (N) into ``p0x, p0y``, de/dx', de/dy' (N) into
         ``p1x, p1y``, de/dx'', de/dy'' (N) into ``p2x, p2y``, and, if ``couples_bot``,
         the sum over n of de_n/d(x_bot, y_bot, theta_bot) (N, N, N cm) into ``dpose[0:3]``.
@@ -236,7 +239,7 @@ class DrivingProtocol(Component):
 
     @abstractmethod
     def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
-        """Draw the whole phase schedule covering [0, ``duration``] s from ``rng``."""
+        """Draw the whole phase schedule covering [0, ``duration``] (s) from ``rng``."""
 
     @abstractmethod
     def initial_heading(self, rng: np.random.Generator) -> float:
@@ -262,7 +265,7 @@ class FrictionLaw(Component):
     density f (N cm^-1, per unit length of membrane) to the element's velocity v (cm s^-1)
     (docs/model.md §3). The engine evaluates the force density of the cut-off modes at M
     equally spaced points (the smallest power of two >= 8 Lc, at most N: 128 with the
-    defaults), applies the law there, and keeps the velocity's modes |k| <= Lc, so
+    defaults), applies the law there, and keeps the velocity's modes ``|k| <= Lc``, so
     the shape stays band-limited whatever the law.
 
     The built-in ``viscous`` law, v = f / gamma_mem, is the paper's; it is ``linear``, and
@@ -287,7 +290,7 @@ class FrictionLaw(Component):
             kernel(fx, fy, coefficients, vx, vy) -> None
 
         ``fx, fy``: float64[M], the force density on the membrane at the M points (N cm^-1);
-        ``coefficients``: float64[:], from :meth:`coefficients`. The kernel writes the
+        ``coefficients``: float64[:], from :meth:`Component.coefficients`. The kernel writes the
         velocity (cm s^-1) into ``vx, vy`` (float64[M]). It must not allocate.
         """
 

@@ -253,7 +253,7 @@ def registered(*plugins: object, name: str = "test_plugin") -> Iterator[Registry
     """Within the block, the process-wide registry also holds ``plugins`` (for tests).
 
     Each plugin is a module or object with hook implementations; the built-ins and installed
-    entry points are registered as usual.
+    entry points are registered as usual (no units: components only).
     """
     extra = [(name if len(plugins) == 1 else f"{name}_{i}", p) for i, p in enumerate(plugins)]
     _override.append(Registry(extra_plugins=extra))
