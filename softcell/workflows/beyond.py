@@ -93,6 +93,24 @@ def _free_long(out: Path, seed: int, workers: int | None, overwrite: bool, progr
         write_dataset(analysis, folder.parent / f"{name}_analysis.nc")
 
 
+def run_variants(out: Path, variants: tuple[Variant, ...], base: Design, *, seed: int,
+                 workers: int | None, overwrite: bool, progress: bool,
+                 log: Callable[[str], None] | None) -> None:
+    """Reproduce each variant of ``base`` into ``out/<variant>`` from one root seed; a
+    variant that finished there (same design, seed and version) is kept as it is."""
+    from softcell.workflows.reproduce import finished
+
+    say = log or (lambda _: None)
+    for i, variant in enumerate(variants):
+        design, folder = variant.design(base), out / variant.name
+        if not overwrite and finished(folder, design, seed):
+            say(f"variant {i + 1}/{len(variants)}: {variant.label} (finished, kept)")
+            continue
+        say(f"variant {i + 1}/{len(variants)}: {variant.label}")
+        reproduce(folder, design, seed=seed, workers=workers, overwrite=overwrite,
+                  progress=progress, log=log)
+
+
 def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = None,
            variants: tuple[Variant, ...] = VARIANTS, base: Design = QUICK,
            overwrite: bool = False, progress: bool = True, long_free_bot: bool = True,
@@ -119,10 +137,8 @@ def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = 
     """
     out = Path(out)
     say = log or (lambda _: None)
-    for i, variant in enumerate(variants):
-        say(f"variant {i + 1}/{len(variants)}: {variant.label}")
-        reproduce(out / variant.name, variant.design(base), seed=seed, workers=workers,
-                  overwrite=overwrite, progress=progress, log=log)
+    run_variants(out, variants, base, seed=seed, workers=workers, overwrite=overwrite,
+                 progress=progress, log=log)
     if long_free_bot:
         say(f"the free bot, {FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s, on the open "
             "floor and in the arena")

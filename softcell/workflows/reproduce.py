@@ -148,6 +148,16 @@ def check_results_directory(out: Path, design: Design, seed: int, overwrite: boo
                             "--overwrite to recompute it, or write to another directory")
 
 
+def finished(folder: Path, design: Design, seed: int) -> bool:
+    """Whether ``folder`` holds a finished reproduction of ``design`` and ``seed`` by this
+    version (its manifest matches and its timing, written last, is there)."""
+    try:
+        made = json.loads((folder / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return False
+    return made == _manifest(design, seed) and (folder / TIMING).is_file()
+
+
 def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int = 0,
               workers: int | None = None, scheduler: str | None = None,
               overwrite: bool = False, progress: bool = True,

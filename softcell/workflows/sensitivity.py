@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from softcell.errors import SoftcellError
-from softcell.workflows.beyond import Variant
-from softcell.workflows.reproduce import MANIFEST, QUICK, TIMING, Design, _manifest, reproduce
+from softcell.workflows.beyond import Variant, run_variants
+from softcell.workflows.reproduce import QUICK, Design
 
 #: The quick design without its video: the study needs the simulations' findings only.
 BASE = replace(QUICK, video=None)
@@ -74,16 +74,6 @@ def variants_named(names: Sequence[str]) -> tuple[Variant, ...]:
     return (known["default"], *(known[n] for n in dict.fromkeys(names) if n != "default"))
 
 
-def finished(folder: Path, design: Design, seed: int) -> bool:
-    """Whether ``folder`` holds a finished reproduction of ``design`` and ``seed`` by this
-    version (its manifest matches and its timing, written last, is there)."""
-    try:
-        made = json.loads((folder / MANIFEST).read_text())
-    except (OSError, ValueError):
-        return False
-    return made == _manifest(design, seed) and (folder / TIMING).is_file()
-
-
 def sensitivity(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = None,
                 variants: tuple[Variant, ...] = VARIANTS, base: Design = BASE,
                 overwrite: bool = False, progress: bool = True,
@@ -111,17 +101,8 @@ def sensitivity(out: str | os.PathLike[str], *, seed: int = 0, workers: int | No
     Path
         ``out / "sensitivity.md"``.
     """
-    out = Path(out)
-    say = log or (lambda _: None)
-    for i, variant in enumerate(variants):
-        design = variant.design(base)
-        folder = out / variant.name
-        if not overwrite and finished(folder, design, seed):
-            say(f"variant {i + 1}/{len(variants)}: {variant.label} (finished, kept)")
-            continue
-        say(f"variant {i + 1}/{len(variants)}: {variant.label}")
-        reproduce(folder, design, seed=seed, workers=workers, overwrite=overwrite,
-                  progress=progress, log=log)
+    run_variants(out, variants, base, seed=seed, workers=workers, overwrite=overwrite,
+                 progress=progress, log=log)
     return summarize(out, variants, seed=seed, base=base)
 
 
@@ -159,7 +140,7 @@ def membrane_measures(sims, params: dict[str, Any], keep: np.ndarray
     samples ``keep`` (the smooth curve through the nodes, which sample a band-limited shape),
     and the largest |L / L_eq - 1| per radius over every realization and sample, L the
     membrane's length (spectrally) and L_eq that of the force-free circle."""
-    from softcell.core.analysis.series import shape_index
+    from softcell.core.analysis.series import smooth_area_perimeter
     from softcell.core.engine.state import equilibrium_radius
     from softcell.core.params import Parameters
     from softcell.core.plugin.registry import get_registry
@@ -167,15 +148,10 @@ def membrane_measures(sims, params: dict[str, Any], keep: np.ndarray
     specs = get_registry().parameter_specs().values()
     ipr, deviation = [], []
     for i, radius in enumerate(np.asarray(sims["radius"].values, dtype=float)):
-        point = sims.isel(radius=i)
-        x = np.asarray(point["membrane_x"].values)  # [realization, time, node]
-        y = np.asarray(point["membrane_y"].values)
-        ipr.append(shape_index(x[:, keep], y[:, keep], band_limited=True).mean(axis=-1))
-        z = x + 1j * y
-        n = z.shape[-1]
-        k = np.fft.fftfreq(n, 1.0 / n)
-        length = 2 * np.pi * np.abs(np.fft.ifft(1j * k * np.fft.fft(z, axis=-1),
-                                                axis=-1)).mean(axis=-1)
+        point = sims.isel(radius=i)  # [realization, time, node]
+        area, length = smooth_area_perimeter(point["membrane_x"].values,
+                                             point["membrane_y"].values)
+        ipr.append((length / np.sqrt(np.abs(area)))[:, keep].mean(axis=-1))
         r_eq = equilibrium_radius(Parameters({**params, "radius": float(radius)}, specs))
         deviation.append(float(np.nanmax(np.abs(length / (2 * np.pi * r_eq) - 1))))
     return np.asarray(ipr), np.asarray(deviation)

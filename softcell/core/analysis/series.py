@@ -99,20 +99,11 @@ def polygon_area_perimeter_centroid(x: np.ndarray, y: np.ndarray
     return area, perimeter, cx, cy
 
 
-def shape_index(x: np.ndarray, y: np.ndarray, band_limited: bool = False) -> np.ndarray:
-    """IPR = P / sqrt(A) of closed curves through the points (x, y) (cm; along the last
-    axis): 2 sqrt(pi) for a circle, larger for any other shape.
-
-    ``band_limited`` False takes the polygon through the points (a tracked contour). True
-    takes the smooth periodic curve they sample, as a simulated membrane's stored nodes do
-    (their number exceeds twice the cutoff mode): the area exactly from its Fourier modes,
-    the perimeter from the spectral tangent on a 4x finer grid. A polygon of N nodes on a
-    circle overestimates the IPR by ~2 sqrt(pi) pi^2 / (2 N^2) (1.4e-3 at N = 64, the size of
-    a simulated membrane's deformation at small R).
-    """
-    if not band_limited:
-        area, perimeter, _, _ = polygon_area_perimeter_centroid(x, y)
-        return perimeter / np.sqrt(np.abs(area))
+def smooth_area_perimeter(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed area (cm^2) and perimeter (cm) of the smooth periodic curve that the points
+    (x, y) (cm; along the last axis) sample, its modes below their Nyquist mode: the area
+    exactly from the Fourier modes, the perimeter from the spectral tangent on a 4x finer
+    grid."""
     z = np.asarray(x, dtype=np.float64) + 1j * np.asarray(y, dtype=np.float64)
     n = z.shape[-1]
     modes = np.fft.fft(z, axis=-1) / n
@@ -123,5 +114,21 @@ def shape_index(x: np.ndarray, y: np.ndarray, band_limited: bool = False) -> np.
     fine[..., :half] = (1j * k * modes)[..., :half]
     fine[..., half - n:] = (1j * k * modes)[..., half:]
     tangent = np.fft.ifft(fine, axis=-1) * (4 * n)
-    perimeter = 2 * np.pi * np.abs(tangent).mean(axis=-1)
+    return area, 2 * np.pi * np.abs(tangent).mean(axis=-1)
+
+
+def shape_index(x: np.ndarray, y: np.ndarray, band_limited: bool = False) -> np.ndarray:
+    """IPR = P / sqrt(A) of closed curves through the points (x, y) (cm; along the last
+    axis): 2 sqrt(pi) for a circle, larger for any other shape.
+
+    ``band_limited`` False takes the polygon through the points (a tracked contour). True
+    takes the smooth periodic curve they sample, as a simulated membrane's stored nodes do
+    (their number exceeds twice the cutoff mode; :func:`smooth_area_perimeter`). A polygon
+    of N nodes on a circle overestimates the IPR by ~2 sqrt(pi) pi^2 / (2 N^2) (1.4e-3 at
+    N = 64, the size of a simulated membrane's deformation at small R).
+    """
+    if band_limited:
+        area, perimeter = smooth_area_perimeter(x, y)
+    else:
+        area, perimeter, _, _ = polygon_area_perimeter_centroid(x, y)
     return perimeter / np.sqrt(np.abs(area))
