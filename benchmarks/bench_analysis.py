@@ -26,14 +26,25 @@ def rows() -> list[dict[str, object]]:
     msd_seconds = time.perf_counter() - start
 
     times = two_rate_times(0.01, 0.1, 100.0, 1800.0)
-    ds = stop_and_go_dataset(rng, times, realizations=25, speed=1.0, mean_go=1.0,
-                             mean_stop=3.0, nodes=64)
+    ds = stop_and_go_dataset(
+        rng, times, realizations=25, speed=1.0, mean_go=1.0, mean_stop=3.0, nodes=64
+    )
     start = time.perf_counter()
     analyze(ds)
     analysis_seconds = time.perf_counter() - start
     return [
-        {"benchmark": "MSD, 1e6 samples", "value": msd_seconds, "unit": "s", "target": 1.0,
-         "note": "FFT algorithm (pyfftw), no missing samples"},
-        {"benchmark": "analysis, 25 x 1800 s", "value": analysis_seconds, "unit": "s",
-         "target": 30.0, "note": f"{times.size} samples x 64 nodes per realization"},
+        {
+            "benchmark": "MSD, 1e6 samples",
+            "value": msd_seconds,
+            "unit": "s",
+            "target": 1.0,
+            "note": "FFT algorithm (pyfftw), no missing samples",
+        },
+        {
+            "benchmark": "analysis, 25 x 1800 s",
+            "value": analysis_seconds,
+            "unit": "s",
+            "target": 30.0,
+            "note": f"{times.size} samples x 64 nodes per realization",
+        },
     ]

@@ -56,29 +56,64 @@ def accuracy_rows(sim, tmp: Path) -> list[dict[str, object]]:
     from softcell.testing.camera import Scene, every_effect, film
 
     rows = []
-    cases = [(name, replace(Scene(wall=wall), **change), wall, 1.0)
-             for name, change in EFFECTS.items() for wall in (0.3, 0.01)]
+    cases = [
+        (name, replace(Scene(wall=wall), **change), wall, 1.0)
+        for name, change in EFFECTS.items()
+        for wall in (0.3, 0.01)
+    ]
     cases += [("every effect", every_effect(wall), wall, 2.0) for wall in (0.3, 0.01)]
     for name, scene, wall, end in cases:
         suffix = ".mp4" if name in ("MPEG-4 4:2:0", "every effect") else ".mkv"
         footage = film(sim, tmp / f"cell{suffix}", scene, offset=OFFSET, end=end)
         level = scene.tilt == (0.0, 0.0)
-        tracked = track(footage.path, plate_size=PLATE, radius=8.0,
-                        camera_height=scene.camera_height if level else None, **HEIGHTS)
+        tracked = track(
+            footage.path,
+            plate_size=PLATE,
+            radius=8.0,
+            camera_height=scene.camera_height if level else None,
+            **HEIGHTS,
+        )
         share, gc, bot, heading = accuracy(tracked, footage)
         every = name == "every effect"
         target = (0.98 if wall > 0.1 else 0.90) if every else None
-        rows.append({"benchmark": f"{name}, wall {wall * 10:g} mm: tracked", "value": share,
-                     "unit": "1", "target": target, "higher_is_better": True,
-                     "note": f"{footage.times.size} frames"})
-        rows.append({"benchmark": f"{name}, wall {wall * 10:g} mm: GC", "value": gc,
-                     "unit": "cm", "target": (0.05 if wall > 0.1 else 0.1) if every else None,
-                     "note": f"bot {bot:.3f} cm, heading {heading:.2f} deg"})
+        rows.append(
+            {
+                "benchmark": f"{name}, wall {wall * 10:g} mm: tracked",
+                "value": share,
+                "unit": "1",
+                "target": target,
+                "higher_is_better": True,
+                "note": f"{footage.times.size} frames",
+            }
+        )
+        rows.append(
+            {
+                "benchmark": f"{name}, wall {wall * 10:g} mm: GC",
+                "value": gc,
+                "unit": "cm",
+                "target": (0.05 if wall > 0.1 else 0.1) if every else None,
+                "note": f"bot {bot:.3f} cm, heading {heading:.2f} deg",
+            }
+        )
         if every and wall > 0.1:
-            rows.append({"benchmark": f"{name}, wall 3 mm: bot", "value": bot, "unit": "cm",
-                         "target": 0.1, "note": ""})
-            rows.append({"benchmark": f"{name}, wall 3 mm: heading", "value": heading,
-                         "unit": "deg", "target": 5.0, "note": ""})
+            rows.append(
+                {
+                    "benchmark": f"{name}, wall 3 mm: bot",
+                    "value": bot,
+                    "unit": "cm",
+                    "target": 0.1,
+                    "note": "",
+                }
+            )
+            rows.append(
+                {
+                    "benchmark": f"{name}, wall 3 mm: heading",
+                    "value": heading,
+                    "unit": "deg",
+                    "target": 5.0,
+                    "note": "",
+                }
+            )
     return rows
 
 
@@ -110,28 +145,54 @@ def speed_rows(sim, tmp: Path) -> list[dict[str, object]]:
         path = tmp / f"long{suffix}"
         writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), 30, (1024, 1024))
         for k in range(300):  # the 31 frames back and forth: 10 s
-            writer.write(frames[k % len(frames)] if (k // len(frames)) % 2 == 0
-                         else frames[-1 - k % len(frames)])
+            writer.write(
+                frames[k % len(frames)]
+                if (k // len(frames)) % 2 == 0
+                else frames[-1 - k % len(frames)]
+            )
         writer.release()
         one, two = decode_rate(path, 1), decode_rate(path, 2)
         start = time.perf_counter()
         track(path, plate_size=PLATE, radius=8.0, **HEIGHTS)
         rate = 300 / (time.perf_counter() - start)
-        rows += [{"benchmark": f"decode only ({fourcc}), 1 thread", "value": one,
-                  "unit": "frame/s", "target": None, "note": "1024^2 camera-like, noise 4"},
-                 {"benchmark": f"decode only ({fourcc}), 2 threads", "value": two,
-                  "unit": "frame/s", "target": None, "note": "FFmpeg's own threads"},
-                 {"benchmark": f"track end to end ({fourcc})", "value": rate,
-                  "unit": "frame/s", "target": 100.0, "higher_is_better": True,
-                  "note": "calibration, decoding and tracking; the decoding bounds it"}]
+        rows += [
+            {
+                "benchmark": f"decode only ({fourcc}), 1 thread",
+                "value": one,
+                "unit": "frame/s",
+                "target": None,
+                "note": "1024^2 camera-like, noise 4",
+            },
+            {
+                "benchmark": f"decode only ({fourcc}), 2 threads",
+                "value": two,
+                "unit": "frame/s",
+                "target": None,
+                "note": "FFmpeg's own threads",
+            },
+            {
+                "benchmark": f"track end to end ({fourcc})",
+                "value": rate,
+                "unit": "frame/s",
+                "target": 100.0,
+                "higher_is_better": True,
+                "note": "calibration, decoding and tracking; the decoding bounds it",
+            },
+        ]
     camera = calibrate_from_plate(frames[0], PLATE)
     tracker = Tracker(camera, 64, ring_z=1.5, bot_z=1.25, radius=8.0)
     start = time.perf_counter()
     for image in frames * 5:
         tracker.track(image)
-    rows.append({"benchmark": "track only (frames in memory)", "value":
-                 5 * len(frames) / (time.perf_counter() - start), "unit": "frame/s",
-                 "target": None, "note": "the tracker's own cost, one core"})
+    rows.append(
+        {
+            "benchmark": "track only (frames in memory)",
+            "value": 5 * len(frames) / (time.perf_counter() - start),
+            "unit": "frame/s",
+            "target": None,
+            "note": "the tracker's own cost, one core",
+        }
+    )
     return rows
 
 

@@ -18,8 +18,7 @@ def _median_seconds(*args: str) -> float:
     times = []
     for _ in range(RUNS):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "softcell", *args], capture_output=True,
-                       check=True)
+        subprocess.run([sys.executable, "-m", "softcell", *args], capture_output=True, check=True)
         times.append(time.perf_counter() - start)
     return statistics.median(times)
 
@@ -27,10 +26,25 @@ def _median_seconds(*args: str) -> float:
 def rows() -> list[dict[str, object]]:
     _median_seconds("plugins")  # warm the kernels' disk cache and the file system
     return [
-        {"benchmark": "softcell --version", "value": _median_seconds("--version"), "unit": "s",
-         "target": 0.3, "note": f"median of {RUNS} new processes"},
-        {"benchmark": "softcell --help", "value": _median_seconds("--help"), "unit": "s",
-         "target": 0.3, "note": f"median of {RUNS} new processes"},
-        {"benchmark": "softcell plugins", "value": _median_seconds("plugins"), "unit": "s",
-         "target": None, "note": "builds the registry: numba and the built-in kernels"},
+        {
+            "benchmark": "softcell --version",
+            "value": _median_seconds("--version"),
+            "unit": "s",
+            "target": 0.3,
+            "note": f"median of {RUNS} new processes",
+        },
+        {
+            "benchmark": "softcell --help",
+            "value": _median_seconds("--help"),
+            "unit": "s",
+            "target": 0.3,
+            "note": f"median of {RUNS} new processes",
+        },
+        {
+            "benchmark": "softcell plugins",
+            "value": _median_seconds("plugins"),
+            "unit": "s",
+            "target": None,
+            "note": "builds the registry: numba and the built-in kernels",
+        },
     ]

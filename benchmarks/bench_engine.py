@@ -24,8 +24,9 @@ CASES = [
 ]
 
 
-def explicit_step(radius: float, protocol: str, warmup: float, span: float, seed: int = 0
-                  ) -> dict[str, float]:
+def explicit_step(
+    radius: float, protocol: str, warmup: float, span: float, seed: int = 0
+) -> dict[str, float]:
     """Time one explicit Euler ``advance`` of ``span`` s after ``warmup`` s; return us per
     step and simulated seconds per wall second."""
     from softcell.core.engine import build_integrator, build_model, initial_state
@@ -52,7 +53,13 @@ def rows() -> list[dict[str, object]]:
     out = []
     for name, radius, protocol, warmup, span, target in CASES:
         result = explicit_step(radius, protocol, warmup, span)
-        out.append({"benchmark": name, "value": result["us_per_step"], "unit": "us/step",
-                    "target": target,
-                    "note": f"{result['sim_s_per_wall_s']:.3f} sim s per wall s"})
+        out.append(
+            {
+                "benchmark": name,
+                "value": result["us_per_step"],
+                "unit": "us/step",
+                "target": target,
+                "note": f"{result['sim_s_per_wall_s']:.3f} sim s per wall s",
+            }
+        )
     return out

@@ -23,8 +23,9 @@ import numpy as np
 
 RADII = (4.0, 8.0, 12.0)
 EXPLICIT_SPAN = 1.0
-REFERENCE = Path(__file__).resolve().parents[1] / "tests" / "regression" / \
-    "integrator_reference.npz"
+REFERENCE = (
+    Path(__file__).resolve().parents[1] / "tests" / "regression" / "integrator_reference.npz"
+)
 STUDY_RADII = tuple(float(r) for r in range(4, 14))
 REALIZATIONS, CORES = 25, 2
 
@@ -54,14 +55,20 @@ def fast_run(radius: float, reference) -> dict[str, float]:
     duration = float(reference["duration"])
     params = parameters(radius, duration)
     result = run(params, "rodas4", seed=int(reference["seed"]))
-    explicit = Record(reference[f"{key}_times"], reference[f"{key}_modes"],
-                      reference[f"{key}_pose"], None)
+    explicit = Record(
+        reference[f"{key}_times"], reference[f"{key}_modes"], reference[f"{key}_pose"], None
+    )
     paths = path_difference(result.record, explicit, int(params.cutoff))
     mine = coarse_statistics(params, result.record, result.record.phase)
     theirs = coarse_statistics(params, explicit, result.record.phase)
     stats = max(abs(mine[k] / theirs[k] - 1) for k in theirs if theirs[k])
-    return {"rate": duration / result.wall, "bot": paths["bot"], "cell": paths["cell"],
-            "stats": stats, **result.statistics}
+    return {
+        "rate": duration / result.wall,
+        "bot": paths["bot"],
+        "cell": paths["cell"],
+        "stats": stats,
+        **result.statistics,
+    }
 
 
 def study_hours(rates: dict[float, float]) -> float:
@@ -82,24 +89,61 @@ def rows() -> list[dict[str, object]]:
         explicit[radius] = explicit_rate(radius)
         result = fast_run(radius, reference)
         fast[radius] = result["rate"]
-        out.append({"benchmark": f"explicit_euler, R={radius:g}", "value": explicit[radius],
-                    "unit": "sim s/s", "target": None,
-                    "note": f"dt = 1e-6 s over the first {EXPLICIT_SPAN:g} s"})
-        out.append({"benchmark": f"rodas4, R={radius:g}", "value": result["rate"],
-                    "unit": "sim s/s", "target": None,
-                    "note": f"{result['steps']} steps, {result['rejected']} rejected, "
-                            f"{result['rhs_calls']} RHS, over 5 s"})
-        out.append({"benchmark": f"ratio rodas4/explicit, R={radius:g}",
-                    "value": result["rate"] / explicit[radius], "unit": "x",
-                    "target": 3000.0, "higher_is_better": True,
-                    "note": "the goal; 1000 was the first target"})
-        out.append({"benchmark": f"rodas4 path error, R={radius:g}",
-                    "value": max(result["bot"], result["cell"]), "unit": "cm", "target": 1e-4,
-                    "note": f"bot {result['bot']:.1e}, cell {result['cell']:.1e}; coarse "
-                            f"statistics within {result['stats']:.1e} (target 1e-2)"})
-    out.append({"benchmark": "paper study, rodas4, 2 cores", "value": study_hours(fast),
-                "unit": "h", "target": 1.0,
-                "note": "projected: 10 radii x 25 x 900/1800 s at the measured rates"})
-    out.append({"benchmark": "paper study, explicit, 2 cores", "value": study_hours(explicit),
-                "unit": "h", "target": None, "note": "projected from the rates above"})
+        out.append(
+            {
+                "benchmark": f"explicit_euler, R={radius:g}",
+                "value": explicit[radius],
+                "unit": "sim s/s",
+                "target": None,
+                "note": f"dt = 1e-6 s over the first {EXPLICIT_SPAN:g} s",
+            }
+        )
+        out.append(
+            {
+                "benchmark": f"rodas4, R={radius:g}",
+                "value": result["rate"],
+                "unit": "sim s/s",
+                "target": None,
+                "note": f"{result['steps']} steps, {result['rejected']} rejected, "
+                f"{result['rhs_calls']} RHS, over 5 s",
+            }
+        )
+        out.append(
+            {
+                "benchmark": f"ratio rodas4/explicit, R={radius:g}",
+                "value": result["rate"] / explicit[radius],
+                "unit": "x",
+                "target": 3000.0,
+                "higher_is_better": True,
+                "note": "the goal; 1000 was the first target",
+            }
+        )
+        out.append(
+            {
+                "benchmark": f"rodas4 path error, R={radius:g}",
+                "value": max(result["bot"], result["cell"]),
+                "unit": "cm",
+                "target": 1e-4,
+                "note": f"bot {result['bot']:.1e}, cell {result['cell']:.1e}; coarse "
+                f"statistics within {result['stats']:.1e} (target 1e-2)",
+            }
+        )
+    out.append(
+        {
+            "benchmark": "paper study, rodas4, 2 cores",
+            "value": study_hours(fast),
+            "unit": "h",
+            "target": 1.0,
+            "note": "projected: 10 radii x 25 x 900/1800 s at the measured rates",
+        }
+    )
+    out.append(
+        {
+            "benchmark": "paper study, explicit, 2 cores",
+            "value": study_hours(explicit),
+            "unit": "h",
+            "target": None,
+            "note": "projected from the rates above",
+        }
+    )
     return out

@@ -42,8 +42,14 @@ def ensemble_rate(out: Path, workers: int, client=None) -> float:
 
     config = RunConfig(parameters=dict(ENSEMBLE))
     start = time.perf_counter()
-    simulate(config, out, realizations=ENSEMBLE_REALIZATIONS, workers=workers, client=client,
-             progress=False)
+    simulate(
+        config,
+        out,
+        realizations=ENSEMBLE_REALIZATIONS,
+        workers=workers,
+        client=client,
+        progress=False,
+    )
     wall = time.perf_counter() - start
     return len(ENSEMBLE["radius"]) * ENSEMBLE_REALIZATIONS * ENSEMBLE["duration"] / wall
 
@@ -55,8 +61,13 @@ def warm_cluster_rate(tmp: Path) -> float:
     from softcell.workflows.ensemble import cluster_client, simulate
 
     with cluster_client(CORES) as client:
-        simulate(RunConfig(parameters={"radius": 6.0, "duration": 0.1}), tmp / "warm-all",
-                 realizations=CORES, client=client, progress=False)
+        simulate(
+            RunConfig(parameters={"radius": 6.0, "duration": 0.1}),
+            tmp / "warm-all",
+            realizations=CORES,
+            client=client,
+            progress=False,
+        )
         return ensemble_rate(tmp / "warm-cluster", 1, client)
 
 
@@ -78,11 +89,16 @@ print(time.perf_counter() - start)
 def plain_processes(tmp: Path, count: int) -> float:
     """Wall time (s) of the slowest of ``count`` processes started at once, each running the
     same two realizations with one BLAS/OpenMP thread."""
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
-               MKL_NUM_THREADS="1")
-    runs = [subprocess.Popen([sys.executable, "-c", PLAIN, str(tmp / f"plain{count}-{k}")],
-                             stdout=subprocess.PIPE, text=True, env=env)
-            for k in range(count)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    runs = [
+        subprocess.Popen(
+            [sys.executable, "-c", PLAIN, str(tmp / f"plain{count}-{k}")],
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        for k in range(count)
+    ]
     return max(float(r.communicate()[0].split()[-1]) for r in runs)
 
 
@@ -90,18 +106,25 @@ def ceiling_rows(tmp: Path) -> list[dict[str, object]]:
     alone = [plain_processes(tmp / f"a{k}", 1) for k in range(3)]
     together = [plain_processes(tmp / f"t{k}", CORES) for k in range(3)]
     ceiling = sorted(alone)[1] / sorted(together)[1]
-    return [{"benchmark": f"machine ceiling, {CORES} plain processes", "value": ceiling,
-             "unit": "1", "target": None,
-             "note": f"median of 3: one alone {sorted(alone)[1]:.2f} s, {CORES} at once "
-                     f"{sorted(together)[1]:.2f} s (R = 9 cm, 2 x 240 s, no dask)"}]
+    return [
+        {
+            "benchmark": f"machine ceiling, {CORES} plain processes",
+            "value": ceiling,
+            "unit": "1",
+            "target": None,
+            "note": f"median of 3: one alone {sorted(alone)[1]:.2f} s, {CORES} at once "
+            f"{sorted(together)[1]:.2f} s (R = 9 cm, 2 x 240 s, no dask)",
+        }
+    ]
 
 
 def ensemble_rows(tmp: Path) -> list[dict[str, object]]:
     from softcell.core.runconfig import RunConfig
     from softcell.workflows.ensemble import simulate
 
-    simulate(RunConfig(parameters={"radius": 6.0, "duration": 0.1}), tmp / "warm",
-             progress=False)  # the compiled model into the cache
+    simulate(
+        RunConfig(parameters={"radius": 6.0, "duration": 0.1}), tmp / "warm", progress=False
+    )  # the compiled model into the cache
     single = ensemble_rate(tmp / "single", 1)
     several = ensemble_rate(tmp / "several", CORES)
     warm = warm_cluster_rate(tmp)
@@ -109,30 +132,61 @@ def ensemble_rows(tmp: Path) -> list[dict[str, object]]:
     ideal = simulated / (CORES * single)
     start_up = simulated / several - simulated / warm
     return [
-        {"benchmark": "ensemble, 1 process", "value": single, "unit": "sim s/s",
-         "target": None, "note": "R = 6, 9, 12 x 4 x 240 s, files included"},
-        {"benchmark": f"ensemble, {CORES} dask workers", "value": several, "unit": "sim s/s",
-         "target": None, "note": f"the same ensemble, side by side: {simulated / several:.1f} s "
-                                 f"against {ideal:.1f} s for 1/{CORES} of the single run"},
-        {"benchmark": f"ensemble efficiency, {CORES} workers", "value": several / (CORES * single),
-         "unit": "1", "target": 0.9, "higher_is_better": True,
-         "note": "rate / (workers x 1-process rate), cluster start included"},
-        {"benchmark": f"ensemble efficiency, {CORES} warm workers",
-         "value": warm / (CORES * single), "unit": "1", "target": None,
-         "note": f"workers already started and loaded: start-up costs {start_up:.1f} s; the rest"
-                 " is the tail and the workers' own overhead"},
+        {
+            "benchmark": "ensemble, 1 process",
+            "value": single,
+            "unit": "sim s/s",
+            "target": None,
+            "note": "R = 6, 9, 12 x 4 x 240 s, files included",
+        },
+        {
+            "benchmark": f"ensemble, {CORES} dask workers",
+            "value": several,
+            "unit": "sim s/s",
+            "target": None,
+            "note": f"the same ensemble, side by side: {simulated / several:.1f} s "
+            f"against {ideal:.1f} s for 1/{CORES} of the single run",
+        },
+        {
+            "benchmark": f"ensemble efficiency, {CORES} workers",
+            "value": several / (CORES * single),
+            "unit": "1",
+            "target": 0.9,
+            "higher_is_better": True,
+            "note": "rate / (workers x 1-process rate), cluster start included",
+        },
+        {
+            "benchmark": f"ensemble efficiency, {CORES} warm workers",
+            "value": warm / (CORES * single),
+            "unit": "1",
+            "target": None,
+            "note": f"workers already started and loaded: start-up costs {start_up:.1f} s; the rest"
+            " is the tail and the workers' own overhead",
+        },
     ]
 
 
 def measured_rows() -> list[dict[str, object]]:
     if not MEASURED.exists():
-        return [{"benchmark": "reproduce --full, measured", "value": float("nan"), "unit": "h",
-                 "target": 1.0, "note": f"not run yet: see {MEASURED.parent}/README.md"}]
+        return [
+            {
+                "benchmark": "reproduce --full, measured",
+                "value": float("nan"),
+                "unit": "h",
+                "target": 1.0,
+                "note": f"not run yet: see {MEASURED.parent}/README.md",
+            }
+        ]
     timing = json.loads(MEASURED.read_text())
-    return [{"benchmark": "reproduce --full, measured", "value": timing["total"] / 3600,
-             "unit": "h", "target": 1.0,
-             "note": f"softcell {timing['version']}, {timing['cores']} cores, "
-                     f"{timing['date']}"}]
+    return [
+        {
+            "benchmark": "reproduce --full, measured",
+            "value": timing["total"] / 3600,
+            "unit": "h",
+            "target": 1.0,
+            "note": f"softcell {timing['version']}, {timing['cores']} cores, {timing['date']}",
+        }
+    ]
 
 
 def rows() -> list[dict[str, object]]:
@@ -144,11 +198,29 @@ def rows() -> list[dict[str, object]]:
         outcome = reproduce(Path(tmp) / "quick", QUICK, progress=False, log=None)
         total = time.perf_counter() - start
     simulated = len(QUICK.radii) * QUICK.realizations * QUICK.duration
-    steps = [{"benchmark": f"reproduce --quick: {name}", "value": seconds, "unit": "s",
-              "target": None, "note": ""} for name, seconds in outcome.steps.items()]
-    steps[0]["note"] = (f"{simulated:g} simulated s: {simulated / outcome.steps['simulations']:.0f}"
-                        " sim s per wall s")
-    return [*out, *steps,
-            {"benchmark": "reproduce --quick, total", "value": total, "unit": "s",
-             "target": 600, "note": "README main job, every core"},
-            *measured_rows()]
+    steps = [
+        {
+            "benchmark": f"reproduce --quick: {name}",
+            "value": seconds,
+            "unit": "s",
+            "target": None,
+            "note": "",
+        }
+        for name, seconds in outcome.steps.items()
+    ]
+    steps[0]["note"] = (
+        f"{simulated:g} simulated s: {simulated / outcome.steps['simulations']:.0f}"
+        " sim s per wall s"
+    )
+    return [
+        *out,
+        *steps,
+        {
+            "benchmark": "reproduce --quick, total",
+            "value": total,
+            "unit": "s",
+            "target": 600,
+            "note": "README main job, every core",
+        },
+        *measured_rows(),
+    ]

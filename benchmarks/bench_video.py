@@ -28,13 +28,28 @@ def rows() -> list[dict[str, object]]:
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        config = RunConfig(parameters={"radius": 12.0, "duration": FRAMES / 30 + 0.1,
-                                       "cutoff": 4, "nodes": 64, "stored_nodes": 16,
-                                       "dt": 1e-5})
+        config = RunConfig(
+            parameters={
+                "radius": 12.0,
+                "duration": FRAMES / 30 + 0.1,
+                "cutoff": 4,
+                "nodes": 64,
+                "stored_nodes": 16,
+                "dt": 1e-5,
+            }
+        )
         sim = read_dataset(simulate(config, tmp / "sim", progress=False)[0])
         video = tmp / "cell.mkv"
-        info = render(sim, video, px_per_cm=10, fps=30, size=(1024, 1024), noise=3, blur=1,
-                      end=(FRAMES - 1) / 30)
+        info = render(
+            sim,
+            video,
+            px_per_cm=10,
+            fps=30,
+            size=(1024, 1024),
+            noise=3,
+            blur=1,
+            end=(FRAMES - 1) / 30,
+        )
         capture = cv2.VideoCapture(str(video))
         frames = []
         start = time.perf_counter()
@@ -56,8 +71,9 @@ def rows() -> list[dict[str, object]]:
         end_to_end = tracked.sizes["time"] / (time.perf_counter() - start)
         # The same frames as a camera's lossy MPEG-4 file.
         lossy = tmp / "cell.mp4"
-        writer = cv2.VideoWriter(str(lossy), cv2.VideoWriter_fourcc(*"mp4v"), 30,
-                                 (info.frame.width, info.frame.height))
+        writer = cv2.VideoWriter(
+            str(lossy), cv2.VideoWriter_fourcc(*"mp4v"), 30, (info.frame.width, info.frame.height)
+        )
         for image in frames:
             writer.write(image)
         writer.release()
@@ -65,13 +81,33 @@ def rows() -> list[dict[str, object]]:
         tracked = track(lossy, px_per_cm=10, origin=(info.frame.x0, info.frame.y0))
         end_to_end_lossy = tracked.sizes["time"] / (time.perf_counter() - start)
     return [
-        {"benchmark": "track 1024x1024 (frames in memory)", "value": rate, "unit": "frame/s",
-         "target": 300.0, "higher_is_better": True,
-         "note": f"at least the target; {IN_MEMORY} frames"},
-        {"benchmark": "track 1024x1024, end to end (FFV1)", "value": end_to_end,
-         "unit": "frame/s", "target": None, "note": "decoding the lossless file included"},
-        {"benchmark": "track 1024x1024, end to end (MPEG-4)", "value": end_to_end_lossy,
-         "unit": "frame/s", "target": None, "note": "a camera-like lossy file"},
-        {"benchmark": "decode only (FFV1), 1024x1024", "value": decode, "unit": "frame/s",
-         "target": None, "note": "noisy frames compress badly: decoding dominates"},
+        {
+            "benchmark": "track 1024x1024 (frames in memory)",
+            "value": rate,
+            "unit": "frame/s",
+            "target": 300.0,
+            "higher_is_better": True,
+            "note": f"at least the target; {IN_MEMORY} frames",
+        },
+        {
+            "benchmark": "track 1024x1024, end to end (FFV1)",
+            "value": end_to_end,
+            "unit": "frame/s",
+            "target": None,
+            "note": "decoding the lossless file included",
+        },
+        {
+            "benchmark": "track 1024x1024, end to end (MPEG-4)",
+            "value": end_to_end_lossy,
+            "unit": "frame/s",
+            "target": None,
+            "note": "a camera-like lossy file",
+        },
+        {
+            "benchmark": "decode only (FFV1), 1024x1024",
+            "value": decode,
+            "unit": "frame/s",
+            "target": None,
+            "note": "noisy frames compress badly: decoding dominates",
+        },
     ]

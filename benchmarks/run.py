@@ -31,8 +31,12 @@ def suites() -> list[str]:
 
 
 def run_suite(name: str) -> dict:
-    done = subprocess.run([sys.executable, "-c", CHILD.format(here=str(HERE), name=name)],
-                          capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", CHILD.format(here=str(HERE), name=name)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     if done.returncode != 0:
         raise SystemExit(f"benchmark suite {name!r} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -53,11 +57,16 @@ def main(argv: list[str]) -> int:
             if target is None:
                 ok = ""
             else:
-                met = row["value"] >= target if row.get("higher_is_better") \
+                met = (
+                    row["value"] >= target
+                    if row.get("higher_is_better")
                     else row["value"] <= target
+                )
                 ok = "yes" if met else "NO"
-            print(f"{row['benchmark']:<40} {row['value']:>10.3g} {row['unit']:<9} "
-                  f"{'' if target is None else format(target, 'g'):>8} {ok:<3} {row['note']}")
+            print(
+                f"{row['benchmark']:<40} {row['value']:>10.3g} {row['unit']:<9} "
+                f"{'' if target is None else format(target, 'g'):>8} {ok:<3} {row['note']}"
+            )
         print(f"{'peak memory, suite ' + name:<40} {result['peak_mib']:>10.0f} {'MiB':<9}")
     return 0
 

@@ -46,8 +46,10 @@ html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 # A public function whose docstring names no unit fails the build (with -W): physical inputs
 # and outputs carry their units (cm, s, rad, N, ...), dimensionless ones say "1" or
 # "dimensionless", and those with no quantity at all say "no units".
-UNIT = re.compile(r"\((?:[^()]*\b(?:cm|s|rad|N|px|cm2|cm/s|frames/s|1|Hz|MiB|B)\b[^()]*)\)"
-                  r"|\bunits?\b|\bdimensionless\b|\bcm\b|\bseconds?\b")
+UNIT = re.compile(
+    r"\((?:[^()]*\b(?:cm|s|rad|N|px|cm2|cm/s|frames/s|1|Hz|MiB|B)\b[^()]*)\)"
+    r"|\bunits?\b|\bdimensionless\b|\bcm\b|\bseconds?\b"
+)
 
 
 def _check_units(app, what, name, obj, options, lines):
@@ -57,8 +59,11 @@ def _check_units(app, what, name, obj, options, lines):
         from sphinx.util import logging
 
         logging.getLogger(__name__).warning(
-            "the docstring of %s states no units (name them, or say 'no units')", name,
-            type="softcell", subtype="units")
+            "the docstring of %s states no units (name them, or say 'no units')",
+            name,
+            type="softcell",
+            subtype="units",
+        )
 
 
 def setup(app):

@@ -56,26 +56,35 @@ def _flag(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
-def _add_parameter_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec],
-                         title: str = "model parameters",
-                         description: str = "override the defaults (softcell params lists "
-                         "them; docs/model.md explains them); a comma-separated list sweeps a "
-                         "parameter") -> None:
+def _add_parameter_flags(
+    parser: argparse.ArgumentParser,
+    specs: Sequence[ParameterSpec],
+    title: str = "model parameters",
+    description: str = "override the defaults (softcell params lists "
+    "them; docs/model.md explains them); a comma-separated list sweeps a "
+    "parameter",
+) -> None:
     group = parser.add_argument_group(title, description)
     for spec in specs:
         unit = "" if spec.unit == "1" else f" [{spec.unit}]"
         default = "derived" if spec.default is None else spec.default
-        group.add_argument(_flag(spec.name), dest=f"param_{spec.name}", metavar="VALUE",
-                           help=f"{spec.long_name}{unit} (default {default})")
+        group.add_argument(
+            _flag(spec.name),
+            dest=f"param_{spec.name}",
+            metavar="VALUE",
+            help=f"{spec.long_name}{unit} (default {default})",
+        )
 
 
-def _add_component_flags(parser: argparse.ArgumentParser,
-                         specs: Sequence[ParameterSpec]) -> None:
+def _add_component_flags(parser: argparse.ArgumentParser, specs: Sequence[ParameterSpec]) -> None:
     """Flags for the parameters that the components in use declare beyond the model's
     (e.g. rodas4's --atol and --rtol)."""
-    _add_parameter_flags(parser, specs, "component parameters",
-                         "parameters of the components this run uses (integrator, protocol, "
-                         "energy terms, detector)")
+    _add_parameter_flags(
+        parser,
+        specs,
+        "component parameters",
+        "parameters of the components this run uses (integrator, protocol, energy terms, detector)",
+    )
 
 
 def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[ParameterSpec, str]]:
@@ -91,8 +100,9 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
         if components is None or _chosen(cls, components):
             for spec in cls.parameters:
                 if spec.name not in MODEL_PARAMETERS:
-                    found.setdefault(spec.name, (spec, f"{cls.kind.replace('_', ' ')} "
-                                                      f"{cls.name!r}"))
+                    found.setdefault(
+                        spec.name, (spec, f"{cls.kind.replace('_', ' ')} {cls.name!r}")
+                    )
     return found
 
 
@@ -161,18 +171,30 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     config = _config(args).updated(components=_component_flags(args))
     run = config.run
-    realizations = args.realizations if args.realizations is not None else run.get(
-        "realizations", 1)
+    realizations = (
+        args.realizations if args.realizations is not None else run.get("realizations", 1)
+    )
     seed = args.seed if args.seed is not None else run.get("seed", 0)
     if args.workers is not None and args.workers < 1:
         raise SoftcellError(f"--workers = {args.workers} is not allowed: must be >= 1")
     if not (math.isfinite(args.checkpoint_every) and args.checkpoint_every > 0):
-        raise SoftcellError(f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
-                            "must be finite and > 0 s")
-    paths = simulate(config, args.output, realizations=realizations, seed=seed,
-                     workers=args.workers or 1, scheduler=args.scheduler,
-                     membrane=not args.free_bot, overwrite=args.overwrite, log=_note,
-                     progress=not args.quiet, checkpoint_every=args.checkpoint_every)
+        raise SoftcellError(
+            f"--checkpoint-every = {args.checkpoint_every} s is not allowed: "
+            "must be finite and > 0 s"
+        )
+    paths = simulate(
+        config,
+        args.output,
+        realizations=realizations,
+        seed=seed,
+        workers=args.workers or 1,
+        scheduler=args.scheduler,
+        membrane=not args.free_bot,
+        overwrite=args.overwrite,
+        log=_note,
+        progress=not args.quiet,
+        checkpoint_every=args.checkpoint_every,
+    )
     print(f"{len(paths)} files in {args.output}")
     return 0
 
@@ -182,8 +204,11 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs, write_dataset
 
-    options = {k.removeprefix("param_"): v for k, v in vars(args).items()
-               if k.startswith("param_") and v is not None}
+    options = {
+        k.removeprefix("param_"): v
+        for k, v in vars(args).items()
+        if k.startswith("param_") and v is not None
+    }
     check_output(args.output, "analysis", inputs=args.inputs, overwrite=args.overwrite)
     ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
     result = analyze(ds, options, progress=not args.quiet)
@@ -201,11 +226,15 @@ def _cmd_render(args: argparse.Namespace) -> int:
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     ds = open_inputs([args.input])
     try:
-        point = {k: int(v) for k, v in (item.split("=") for item in args.point.split(","))} \
-            if args.point else {}
+        point = (
+            {k: int(v) for k, v in (item.split("=") for item in args.point.split(","))}
+            if args.point
+            else {}
+        )
     except ValueError:
-        raise SoftcellError(f"--point = {args.point!r} is not allowed: must be NAME=INDEX[,...] "
-                            "(e.g. radius=1)") from None
+        raise SoftcellError(
+            f"--point = {args.point!r} is not allowed: must be NAME=INDEX[,...] (e.g. radius=1)"
+        ) from None
     try:
         size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
     except ValueError:
@@ -216,17 +245,31 @@ def _cmd_render(args: argparse.Namespace) -> int:
         validate(ds)
     except SchemaError as exc:
         raise SoftcellError(f"{args.input} cannot be rendered: {exc}") from None
-    info = render(ds, args.output, realization=args.realization, point=point,
-                  px_per_cm=args.px_per_cm,
-                  fps=args.fps, size=size, start=args.start, end=args.end, noise=args.noise,
-                  blur=args.blur, illumination=args.illumination, seed=args.seed,
-                  head_mark=not args.no_head_mark, progress=not args.quiet)
+    info = render(
+        ds,
+        args.output,
+        realization=args.realization,
+        point=point,
+        px_per_cm=args.px_per_cm,
+        fps=args.fps,
+        size=size,
+        start=args.start,
+        end=args.end,
+        noise=args.noise,
+        blur=args.blur,
+        illumination=args.illumination,
+        seed=args.seed,
+        head_mark=not args.no_head_mark,
+        progress=not args.quiet,
+    )
     for note in info.notes:
         print(f"note: {note}")
-    print(f"{info.times.size} frames of {info.frame.width}x{info.frame.height} px written to "
-          f"{info.path}; lower-left corner at {info.frame.x0:.6f},{info.frame.y0:.6f} cm "
-          f"(track it with --px-per-cm {info.frame.px_per_cm:g} "
-          f"--origin={info.frame.x0:.6f},{info.frame.y0:.6f})")
+    print(
+        f"{info.times.size} frames of {info.frame.width}x{info.frame.height} px written to "
+        f"{info.path}; lower-left corner at {info.frame.x0:.6f},{info.frame.y0:.6f} cm "
+        f"(track it with --px-per-cm {info.frame.px_per_cm:g} "
+        f"--origin={info.frame.x0:.6f},{info.frame.y0:.6f})"
+    )
     return 0
 
 
@@ -240,28 +283,45 @@ def _cmd_track(args: argparse.Namespace) -> int:
     except ValueError:
         origin = ()
     if len(origin) != 2 or not all(map(math.isfinite, origin)):
-        raise SoftcellError(f"--origin = {args.origin!r} is not allowed: must be X,Y, two "
-                            "finite coordinates in cm")
+        raise SoftcellError(
+            f"--origin = {args.origin!r} is not allowed: must be X,Y, two finite coordinates in cm"
+        )
     if not args.video.is_file():
         raise SoftcellError(f"no such video file: {args.video}")
     check_output(args.output, "tracking", inputs=[args.video], overwrite=args.overwrite)
     if args.overlay is not None:
         if os.path.abspath(args.overlay) == os.path.abspath(args.output):
-            raise SoftcellError(f"--overlay {args.overlay} is the tracked file -o: give "
-                                "another name")
+            raise SoftcellError(
+                f"--overlay {args.overlay} is the tracked file -o: give another name"
+            )
         codec(args.overlay)  # a video suffix, or a clear error
-        check_output(args.overlay, "video", inputs=[args.video], overwrite=args.overwrite,
-                     option="--overlay")
-    ds = track(args.video, px_per_cm=args.px_per_cm, arena_size=args.arena_size,
-               origin=origin, plate_size=args.plate_size, camera=args.camera,
-               camera_height=args.camera_height, ring_height=args.ring_height,
-               bot_height=args.bot_height, ring_color=args.ring_color,
-               ring_threshold=args.ring_threshold,
-               dark_fraction=args.dark_fraction, fps=args.fps, nodes=args.nodes,
-               radius=args.radius, overlay=args.overlay, progress=not args.quiet)
+        check_output(
+            args.overlay, "video", inputs=[args.video], overwrite=args.overwrite, option="--overlay"
+        )
+    ds = track(
+        args.video,
+        px_per_cm=args.px_per_cm,
+        arena_size=args.arena_size,
+        origin=origin,
+        plate_size=args.plate_size,
+        camera=args.camera,
+        camera_height=args.camera_height,
+        ring_height=args.ring_height,
+        bot_height=args.bot_height,
+        ring_color=args.ring_color,
+        ring_threshold=args.ring_threshold,
+        dark_fraction=args.dark_fraction,
+        fps=args.fps,
+        nodes=args.nodes,
+        radius=args.radius,
+        overlay=args.overlay,
+        progress=not args.quiet,
+    )
     path = write_dataset(ds, args.output)
-    print(f"{ds.sizes['time']} frames tracked, {ds.attrs['softcell_tracking_summary']}, "
-          f"written to {path}")
+    print(
+        f"{ds.sizes['time']} frames tracked, {ds.attrs['softcell_tracking_summary']}, "
+        f"written to {path}"
+    )
     failures = json.loads(ds.attrs["softcell_tracking_failures"])
     for reason, count in failures.items():
         print(f"  {count} frame(s) lost: {reason}")
@@ -279,13 +339,16 @@ def _cmd_figures(args: argparse.Namespace) -> int:
     check_output(args.output, "figure", inputs=inputs, directory=True)
     for name in FIGURES:
         for fmt in FORMATS:
-            check_output(args.output / f"{name}.{fmt}", "figure", inputs=inputs,
-                         overwrite=args.overwrite)
+            check_output(
+                args.output / f"{name}.{fmt}", "figure", inputs=inputs, overwrite=args.overwrite
+            )
     made = make_figures(
-        read_dataset(args.analysis), args.output,
+        read_dataset(args.analysis),
+        args.output,
         simulations=open_dataset(args.simulations) if args.simulations else None,
         free_bot=read_dataset(args.free_bot) if args.free_bot else None,
-        tracked=read_dataset(args.tracked) if args.tracked else None)
+        tracked=read_dataset(args.tracked) if args.tracked else None,
+    )
     for name, files in made.files.items():
         print(f"{name}: {', '.join(str(f) for f in files)}")
     for name, why in made.skipped.items():
@@ -296,9 +359,15 @@ def _cmd_figures(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from softcell.workflows.reproduce import DESIGNS, reproduce
 
-    outcome = reproduce(args.output, DESIGNS["full" if args.full else "quick"], seed=args.seed,
-                        workers=args.workers, scheduler=args.scheduler,
-                        overwrite=args.overwrite, progress=not args.quiet)
+    outcome = reproduce(
+        args.output,
+        DESIGNS["full" if args.full else "quick"],
+        seed=args.seed,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+    )
     print(f"done in {sum(outcome.steps.values()):.0f} s: {outcome.report}")
     return 0
 
@@ -306,17 +375,31 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 def _cmd_beyond(args: argparse.Namespace) -> int:
     from softcell.workflows.beyond import beyond
 
-    report = beyond(args.output, seed=args.seed, workers=args.workers,
-                    overwrite=args.overwrite, progress=not args.quiet, log=_note)
+    report = beyond(
+        args.output,
+        seed=args.seed,
+        workers=args.workers,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+        log=_note,
+    )
     print(f"done: {report}")
     return 0
 
 
 def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
-    p.add_argument("-o", "--output", type=Path, required=True,
-                   help="results directory (one reproduction per variant inside)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="recompute what the directory holds from another seed or version")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        help="results directory (one reproduction per variant inside)",
+    )
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="recompute what the directory holds from another seed or version",
+    )
     p.add_argument("--seed", type=int, default=0, help="root seed of every variant")
     p.add_argument("--workers", type=int, help="local worker processes (default: every core)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -326,22 +409,38 @@ def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _cmd_study(args: argparse.Namespace) -> int:
     from softcell.workflows.sensitivity import VARIANTS, sensitivity, variants_named
 
-    variants = VARIANTS if args.only is None else variants_named(
-        [n.strip() for n in args.only.split(",") if n.strip()])
-    report = sensitivity(args.output, seed=args.seed, workers=args.workers, variants=variants,
-                         overwrite=args.overwrite, progress=not args.quiet, log=_note)
+    variants = (
+        VARIANTS
+        if args.only is None
+        else variants_named([n.strip() for n in args.only.split(",") if n.strip()])
+    )
+    report = sensitivity(
+        args.output,
+        seed=args.seed,
+        workers=args.workers,
+        variants=variants,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+        log=_note,
+    )
     print(f"done: {report}")
     return 0
 
 
 def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
-    p.add_argument("study", choices=["sensitivity"],
-                   help="sensitivity: the quick design over one of the paper's unknowns at a "
-                        "time (bot size, k, Lambda_c, lambda, rotation, friction)")
-    p.add_argument("--only", metavar="NAMES",
-                   help="comma-separated variants to run beside the defaults (default: all: "
-                        "bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
-                        "lambda_1e-4, pivot, coulomb)")
+    p.add_argument(
+        "study",
+        choices=["sensitivity"],
+        help="sensitivity: the quick design over one of the paper's unknowns at a "
+        "time (bot size, k, Lambda_c, lambda, rotation, friction)",
+    )
+    p.add_argument(
+        "--only",
+        metavar="NAMES",
+        help="comma-separated variants to run beside the defaults (default: all: "
+        "bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
+        "lambda_1e-4, pivot, coulomb)",
+    )
     _add_beyond(p, strict, specs)
     p.set_defaults(func=_cmd_study)
 
@@ -366,14 +465,22 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     radius = _numbers("--radius", args.radius)
     ipr, ipr_error = _numbers("--ipr", args.ipr), _numbers("--ipr-error", args.ipr_error)
     if args.push_speed is None and ipr is None:
-        raise SoftcellError("nothing to calibrate: give --push-speed V (for gamma_mem) and/or "
-                            "--ipr I1,I2,... (for k), with --radius")
+        raise SoftcellError(
+            "nothing to calibrate: give --push-speed V (for gamma_mem) and/or "
+            "--ipr I1,I2,... (for k), with --radius"
+        )
     if args.push_speed is not None and ipr is not None and len(radius) != 1 + len(ipr):
-        raise SoftcellError(f"--radius has {len(radius)} value(s): with both calibrations give "
-                            "the push's radius first, then one radius per IPR value")
+        raise SoftcellError(
+            f"--radius has {len(radius)} value(s): with both calibrations give "
+            "the push's radius first, then one radius per IPR value"
+        )
     if args.output is not None:
-        check_output(args.output, "report", overwrite=args.overwrite,
-                     inputs=[args.config] if args.config else [])
+        check_output(
+            args.output,
+            "report",
+            overwrite=args.overwrite,
+            inputs=[args.config] if args.config else [],
+        )
     config = load_config(args.config) if args.config else RunConfig()
     workers = args.workers or 1
     options = {"seed": args.seed, "workers": workers, "log": None if args.quiet else _note}
@@ -383,23 +490,32 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         if ipr is None and radius:
             raise SoftcellError("--push-speed calibrates at one radius: give one --radius")
         found = calibrate_friction(
-            args.push_speed, push_radius, config=config,
+            args.push_speed,
+            push_radius,
+            config=config,
             push_speed_error=args.push_speed_error or 0.0,
-            **_given(realizations=args.realizations, duration=args.duration,
-                     settle=args.settle), **options)
+            **_given(realizations=args.realizations, duration=args.duration, settle=args.settle),
+            **options,
+        )
         print(found.summary())
         results.append(found)
         config = config.updated(parameters={"membrane_friction": found.value})
     if ipr is not None:
-        found = calibrate_bending(ipr, radius, config=config, ipr_error=ipr_error,
-                                  **_given(realizations=args.realizations,
-                                           duration=args.duration, settle=args.settle),
-                                  **options)
+        found = calibrate_bending(
+            ipr,
+            radius,
+            config=config,
+            ipr_error=ipr_error,
+            **_given(realizations=args.realizations, duration=args.duration, settle=args.settle),
+            **options,
+        )
         print(found.summary())
         results.append(found)
     if not (args.push_speed_error or ipr_error):
-        print("(uncertainty: the simulations' spread across realizations and the search's "
-              "tolerance; give --push-speed-error / --ipr-error to add the measurements')")
+        print(
+            "(uncertainty: the simulations' spread across realizations and the search's "
+            "tolerance; give --push-speed-error / --ipr-error to add the measurements')"
+        )
     if args.output is not None:
         print(f"written: {write_calibration(results, args.output, config)}")
     return 0
@@ -410,28 +526,47 @@ def _given(**values: Any) -> dict[str, Any]:
 
 
 def _add_calibrate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
-    p.add_argument("config", nargs="?", type=Path,
-                   help="TOML configuration: every other parameter and the components")
-    p.add_argument("--push-speed", type=float, metavar="V",
-                   help="measured time-averaged GC speed of a constantly pushed cell (cm/s): "
-                        "calibrates gamma_mem")
-    p.add_argument("--push-speed-error", type=float, metavar="DV",
-                   help="its standard error (cm/s)")
-    p.add_argument("--ipr", metavar="I1,I2,...",
-                   help="measured time-averaged shape index P / sqrt(A) at each radius: "
-                        "calibrates k")
+    p.add_argument(
+        "config",
+        nargs="?",
+        type=Path,
+        help="TOML configuration: every other parameter and the components",
+    )
+    p.add_argument(
+        "--push-speed",
+        type=float,
+        metavar="V",
+        help="measured time-averaged GC speed of a constantly pushed cell (cm/s): "
+        "calibrates gamma_mem",
+    )
+    p.add_argument("--push-speed-error", type=float, metavar="DV", help="its standard error (cm/s)")
+    p.add_argument(
+        "--ipr",
+        metavar="I1,I2,...",
+        help="measured time-averaged shape index P / sqrt(A) at each radius: calibrates k",
+    )
     p.add_argument("--ipr-error", metavar="E1,E2,...", help="their standard errors")
-    p.add_argument("--radius", required=strict, metavar="R1,R2,...",
-                   help="radii (cm): the push's, then one per IPR value")
-    p.add_argument("--realizations", type=int,
-                   help="realizations per evaluation and radius (default 2 for the push, 4 "
-                        "for the IPR)")
-    p.add_argument("--duration", type=float,
-                   help="simulated seconds per realization (default 15 for the push, 120 for "
-                        "the IPR)")
-    p.add_argument("--settle", type=float,
-                   help="seconds left out before averaging (default 5 for the push, 15 for "
-                        "the IPR)")
+    p.add_argument(
+        "--radius",
+        required=strict,
+        metavar="R1,R2,...",
+        help="radii (cm): the push's, then one per IPR value",
+    )
+    p.add_argument(
+        "--realizations",
+        type=int,
+        help="realizations per evaluation and radius (default 2 for the push, 4 for the IPR)",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        help="simulated seconds per realization (default 15 for the push, 120 for the IPR)",
+    )
+    p.add_argument(
+        "--settle",
+        type=float,
+        help="seconds left out before averaging (default 5 for the push, 15 for the IPR)",
+    )
     p.add_argument("--seed", type=int, default=0, help="root seed (every evaluation uses it)")
     p.add_argument("--workers", type=int, help="local worker processes (default 1)")
     p.add_argument("-o", "--output", type=Path, help="also write the results as JSON")
@@ -443,10 +578,13 @@ def _add_calibrate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, help=workers_help)
-    group.add_argument("--scheduler", metavar="ADDRESS",
-                       help="run the realizations on the dask.distributed cluster whose "
-                            "scheduler listens at ADDRESS (e.g. tcp://10.0.0.5:8786), one task "
-                            "per realization; its workers must see the output directory")
+    group.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the realizations on the dask.distributed cluster whose "
+        "scheduler listens at ADDRESS (e.g. tcp://10.0.0.5:8786), one task "
+        "per realization; its workers must see the output directory",
+    )
 
 
 def _describe(ds: Any) -> str:
@@ -466,10 +604,15 @@ def _add_plugins(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 
 def _add_component_choice(p: argparse.ArgumentParser) -> None:
     p.add_argument("--protocol", help="driving protocol (default run_and_tumble)")
-    p.add_argument("--integrator", help="integrator (default rodas4; explicit_euler is the "
-                   "paper's scheme, the reference)")
-    p.add_argument("--friction-law", help="the membrane's friction law (default viscous, the "
-                   "paper's; coulomb adds a static threshold)")
+    p.add_argument(
+        "--integrator",
+        help="integrator (default rodas4; explicit_euler is the paper's scheme, the reference)",
+    )
+    p.add_argument(
+        "--friction-law",
+        help="the membrane's friction law (default viscous, the "
+        "paper's; coulomb adds a static threshold)",
+    )
     p.add_argument("--energy-terms", help="comma-separated energy terms")
 
 
@@ -483,21 +626,34 @@ def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 
 def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
-    p.add_argument("-o", "--output", type=Path, required=strict,
-                   help="directory for the files, one per (parameter point, realization)")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=strict,
+        help="directory for the files, one per (parameter point, realization)",
+    )
     p.add_argument("--realizations", type=int, help="realizations per parameter point")
     p.add_argument("--seed", type=int, help="root seed of every random stream (default 0)")
     _add_cluster_flags(p, "local worker processes (default 1; more: a local dask cluster)")
     _add_component_choice(p)
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
-    p.add_argument("--overwrite", action="store_true",
-                   help="recompute files in OUT made with other settings (and remove "
-                        "simulation files that are no part of this request) instead of "
-                        "stopping")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="recompute files in OUT made with other settings (and remove "
+        "simulation files that are no part of this request) instead of "
+        "stopping",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--checkpoint-every", type=float, default=CHECKPOINT_EVERY, metavar="SECONDS",
-                   help="wall seconds between checkpoints of a running realization "
-                        f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one")
+    p.add_argument(
+        "--checkpoint-every",
+        type=float,
+        default=CHECKPOINT_EVERY,
+        metavar="SECONDS",
+        help="wall seconds between checkpoints of a running realization "
+        f"(default {CHECKPOINT_EVERY:g}); a killed run resumes from the last one",
+    )
     _add_parameter_flags(p, list(MODEL_PARAMETERS.values()))
     _add_component_flags(p, specs)
     p.set_defaults(func=_cmd_simulate)
@@ -506,21 +662,38 @@ def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _add_analyze(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     from softcell.core.analysis.options import ANALYSIS_OPTIONS
 
-    p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT",
-                   help="NetCDF files or directories of one sweep (softcell simulate / track)")
+    p.add_argument(
+        "inputs",
+        nargs="+",
+        type=Path,
+        metavar="INPUT",
+        help="NetCDF files or directories of one sweep (softcell simulate / track)",
+    )
     p.add_argument("-o", "--output", type=Path, required=True, help="analysis file (.nc)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing file that is not a softcell analysis")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing file that is not a softcell analysis",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    _add_parameter_flags(p, list(ANALYSIS_OPTIONS.values()), "analysis options",
-                         "see docs/analysis.md; stored in the output file")
+    _add_parameter_flags(
+        p,
+        list(ANALYSIS_OPTIONS.values()),
+        "analysis options",
+        "see docs/analysis.md; stored in the output file",
+    )
     p.set_defaults(func=_cmd_analyze)
 
 
 def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("input", type=Path, help="simulation file or sweep directory")
-    p.add_argument("-o", "--output", type=Path, required=True,
-                   help="video: .mkv/.avi (lossless, for tracking) or .mp4")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        help="video: .mkv/.avi (lossless, for tracking) or .mp4",
+    )
     p.add_argument("--overwrite", action="store_true", help="replace an existing video")
     p.add_argument("--realization", type=int, default=0)
     p.add_argument("--point", help="sweep point, e.g. radius=1 (an index)")
@@ -531,8 +704,9 @@ def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("--end", type=float, help="last frame time [s]")
     p.add_argument("--noise", type=float, default=0.0, help="Gaussian noise [grey levels]")
     p.add_argument("--blur", type=float, default=0.0, help="Gaussian blur [px]")
-    p.add_argument("--illumination", type=float, default=0.0,
-                   help="relative amplitude of uneven illumination")
+    p.add_argument(
+        "--illumination", type=float, default=0.0, help="relative amplitude of uneven illumination"
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the noise")
     p.add_argument("--no-head-mark", action="store_true", help="no mark at the bot's head")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -542,40 +716,71 @@ def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("video", type=Path)
     p.add_argument("-o", "--output", type=Path, required=True, help="tracked file (.nc)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing file that is not a softcell tracking file")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing file that is not a softcell tracking file",
+    )
     p.add_argument("--px-per-cm", type=float, help="scale [px/cm]")
-    p.add_argument("--arena-size", type=float,
-                   help="world width of the frame [cm], to derive the scale")
+    p.add_argument(
+        "--arena-size", type=float, help="world width of the frame [cm], to derive the scale"
+    )
     p.add_argument("--origin", help="world position X,Y [cm] of the lower-left corner")
     camera = p.add_argument_group(
-        "camera", "calibrate from the plate seen in the first frame (perspective, lens, "
-                  "parallax) instead of a linear scale; positions in plate coordinates, origin "
-                  "at the plate corner seen at the lower left")
+        "camera",
+        "calibrate from the plate seen in the first frame (perspective, lens, "
+        "parallax) instead of a linear scale; positions in plate coordinates, origin "
+        "at the plate corner seen at the lower left",
+    )
     camera.add_argument("--plate-size", type=float, help="side of the square plate [cm]")
-    camera.add_argument("--camera", type=Path,
-                        help="OpenCV calibration file (camera_matrix, distortion_coefficients)")
-    camera.add_argument("--camera-height", type=float,
-                        help="camera height above the plate [cm] (default: from --camera, or "
-                             "estimated from the plate when the camera is tilted)")
-    camera.add_argument("--ring-height", type=float, default=0.0,
-                        help="height of the membrane's wall [cm] (parallax; default 0)")
-    camera.add_argument("--bot-height", type=float, default=0.0,
-                        help="height of the bot [cm] (parallax; default 0)")
-    p.add_argument("--ring-color", default="red",
-                   help="the paper's colour: red (also orange), green, blue, yellow")
-    p.add_argument("--ring-threshold", type=float,
-                   help="colourfulness of paper, (R - max(G, B)) / R for red (default: per "
-                        "frame)")
-    p.add_argument("--dark-fraction", type=float, default=0.5,
-                   help="bot pixels are darker than this fraction of the plate (default 0.5)")
-    p.add_argument("--overlay", type=Path,
-                   help="also write the frames with what was tracked drawn on them "
-                        "(.mkv/.avi/.mp4)")
+    camera.add_argument(
+        "--camera",
+        type=Path,
+        help="OpenCV calibration file (camera_matrix, distortion_coefficients)",
+    )
+    camera.add_argument(
+        "--camera-height",
+        type=float,
+        help="camera height above the plate [cm] (default: from --camera, or "
+        "estimated from the plate when the camera is tilted)",
+    )
+    camera.add_argument(
+        "--ring-height",
+        type=float,
+        default=0.0,
+        help="height of the membrane's wall [cm] (parallax; default 0)",
+    )
+    camera.add_argument(
+        "--bot-height", type=float, default=0.0, help="height of the bot [cm] (parallax; default 0)"
+    )
+    p.add_argument(
+        "--ring-color",
+        default="red",
+        help="the paper's colour: red (also orange), green, blue, yellow",
+    )
+    p.add_argument(
+        "--ring-threshold",
+        type=float,
+        help="colourfulness of paper, (R - max(G, B)) / R for red (default: per frame)",
+    )
+    p.add_argument(
+        "--dark-fraction",
+        type=float,
+        default=0.5,
+        help="bot pixels are darker than this fraction of the plate (default 0.5)",
+    )
+    p.add_argument(
+        "--overlay",
+        type=Path,
+        help="also write the frames with what was tracked drawn on them (.mkv/.avi/.mp4)",
+    )
     p.add_argument("--fps", type=float, help="frame rate [1/s] (default: the file's)")
     p.add_argument("--nodes", type=int, default=64, help="membrane points (default 64)")
-    p.add_argument("--radius", type=float,
-                   help="membrane radius R [cm]: expected perimeter 2 pi R (default: learned)")
+    p.add_argument(
+        "--radius",
+        type=float,
+        help="membrane radius R [cm]: expected perimeter 2 pi R (default: learned)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
 
@@ -583,26 +788,40 @@ def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _add_figures(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("analysis", type=Path, help="analysis file of a radius sweep (.nc)")
     p.add_argument("-o", "--output", type=Path, required=True, help="directory for the figures")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace existing fig*.png/pdf files that softcell did not draw")
-    p.add_argument("--simulations", type=Path,
-                   help="the sweep's simulation directory (trajectories of Fig. 2)")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace existing fig*.png/pdf files that softcell did not draw",
+    )
+    p.add_argument(
+        "--simulations", type=Path, help="the sweep's simulation directory (trajectories of Fig. 2)"
+    )
     p.add_argument("--free-bot", type=Path, help="analysis of free-bot runs (Fig. S1)")
-    p.add_argument("--tracked", type=Path,
-                   help="analysis of a tracked video (the experiments' markers)")
+    p.add_argument(
+        "--tracked", type=Path, help="analysis of a tracked video (the experiments' markers)"
+    )
     p.set_defaults(func=_cmd_figures)
 
 
 def _add_reproduce(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     design = p.add_mutually_exclusive_group()
-    design.add_argument("--quick", action="store_true",
-                        help="every radius, 5 realizations of 240 s (the default; minutes)")
-    design.add_argument("--full", action="store_true",
-                        help="the paper's design: 25 realizations of 900/1800 s per radius")
+    design.add_argument(
+        "--quick",
+        action="store_true",
+        help="every radius, 5 realizations of 240 s (the default; minutes)",
+    )
+    design.add_argument(
+        "--full",
+        action="store_true",
+        help="the paper's design: 25 realizations of 900/1800 s per radius",
+    )
     p.add_argument("-o", "--output", type=Path, required=True, help="results directory")
-    p.add_argument("--overwrite", action="store_true",
-                   help="recompute what the directory holds from another design, seed or "
-                        "version (or use a directory softcell did not make) instead of stopping")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="recompute what the directory holds from another design, seed or "
+        "version (or use a directory softcell did not make) instead of stopping",
+    )
     p.add_argument("--seed", type=int, default=0, help="root seed of every random stream")
     _add_cluster_flags(p, "local worker processes (default: every core)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -610,12 +829,19 @@ def _add_reproduce(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 
 
 def _add_cache(p: argparse.ArgumentParser, strict: bool, specs) -> None:
-    p.add_argument("action", nargs="?", choices=("show", "clear"), default="show",
-                   help="show (the default): location, size and entries; clear: remove every "
-                        "entry")
-    p.add_argument("--stale", action="store_true",
-                   help="with clear: only the entries another softcell build or numba, numpy "
-                        "or Python version made (never read again)")
+    p.add_argument(
+        "action",
+        nargs="?",
+        choices=("show", "clear"),
+        default="show",
+        help="show (the default): location, size and entries; clear: remove every entry",
+    )
+    p.add_argument(
+        "--stale",
+        action="store_true",
+        help="with clear: only the entries another softcell build or numba, numpy "
+        "or Python version made (never read again)",
+    )
     p.set_defaults(func=_cmd_cache)
 
 
@@ -629,17 +855,24 @@ def _cmd_cache(args: argparse.Namespace) -> int:
         return 0
     found = compiled.entries(root)
     total = sum(e.size for e in found)
-    source = f"${compiled.CACHE_ENV}" if os.environ.get(compiled.CACHE_ENV) else \
-        "the user cache directory"
+    source = (
+        f"${compiled.CACHE_ENV}"
+        if os.environ.get(compiled.CACHE_ENV)
+        else "the user cache directory"
+    )
     print(f"location: {root}  (from {source})")
     stale = sum(e.stale for e in found)
-    print(f"size: {total / 2**20:.1f} MiB in {len(found)} entries ({stale} stale: made by "
-          "another softcell build or numba, numpy, Python version; 'softcell cache clear "
-          "--stale' removes them)")
+    print(
+        f"size: {total / 2**20:.1f} MiB in {len(found)} entries ({stale} stale: made by "
+        "another softcell build or numba, numpy, Python version; 'softcell cache clear "
+        "--stale' removes them)"
+    )
     for entry in found:
         mark = "  stale" if entry.stale else ""
-        print(f"    {entry.name}  {entry.size / 2**10:.0f} KiB  {entry.created}{mark}  "
-              f"{entry.description}")
+        print(
+            f"    {entry.name}  {entry.size / 2**10:.0f} KiB  {entry.created}{mark}  "
+            f"{entry.description}"
+        )
     return 0
 
 
@@ -649,37 +882,58 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
     "plugins": ("list every component by kind, with origin and parameters", _add_plugins),
     "params": ("validate and print the parameters of a configuration", _add_params),
     "simulate": ("simulate an ensemble: parameter points x realizations", _add_simulate),
-    "analyze": ("MSD, stop/go, fits and theory of simulated or tracked files, as one NetCDF "
-                "file", _add_analyze),
+    "analyze": (
+        "MSD, stop/go, fits and theory of simulated or tracked files, as one NetCDF file",
+        _add_analyze,
+    ),
     "render": ("a top-view movie of one simulated realization", _add_render),
     "track": ("track a top-view video into the simulation schema", _add_track),
-    "figures": ("the paper's figures (PNG and PDF) from an analysis of a radius sweep",
-                _add_figures),
-    "reproduce": ("the paper end to end: simulate, analyze, render and track, figures, report",
-                  _add_reproduce),
-    "beyond": ("the quick design with static friction (3 thresholds) and in the arena, beside "
-               "the paper's model", _add_beyond),
-    "study": ("'study sensitivity': which of the paper's findings its unknowns decide, one "
-              "unknown at a time", _add_study),
-    "calibrate": ("gamma_mem from a pushed cell's speed, k from the mean IPR, as the paper "
-                  "calibrated them", _add_calibrate),
-    "cache": ("the compiled-model cache: where it is, what it holds; 'cache clear' empties it",
-              _add_cache),
+    "figures": (
+        "the paper's figures (PNG and PDF) from an analysis of a radius sweep",
+        _add_figures,
+    ),
+    "reproduce": (
+        "the paper end to end: simulate, analyze, render and track, figures, report",
+        _add_reproduce,
+    ),
+    "beyond": (
+        "the quick design with static friction (3 thresholds) and in the arena, beside "
+        "the paper's model",
+        _add_beyond,
+    ),
+    "study": (
+        "'study sensitivity': which of the paper's findings its unknowns decide, one "
+        "unknown at a time",
+        _add_study,
+    ),
+    "calibrate": (
+        "gamma_mem from a pushed cell's speed, k from the mean IPR, as the paper calibrated them",
+        _add_calibrate,
+    ),
+    "cache": (
+        "the compiled-model cache: where it is, what it holds; 'cache clear' empties it",
+        _add_cache,
+    ),
 }
 #: Commands whose flags include the parameters of the components in use.
 WITH_COMPONENTS = ("params", "simulate")
 
 
-def build_parser(command: str | None = None, *, strict: bool = True,
-                 specs: Sequence[ParameterSpec] = ()) -> argparse.ArgumentParser:
+def build_parser(
+    command: str | None = None, *, strict: bool = True, specs: Sequence[ParameterSpec] = ()
+) -> argparse.ArgumentParser:
     """The argument parser of the ``softcell`` command, with the arguments of ``command`` (of
     every command when None); ``specs`` are the component parameters offered as flags, and a
     parser that is not ``strict`` requires nothing (to read the component choice first)."""
-    parser = _Parser(prog="softcell", add_help=strict,
-                     description="Simulate, track and analyse a soft robotic cell.")
+    parser = _Parser(
+        prog="softcell",
+        add_help=strict,
+        description="Simulate, track and analyse a soft robotic cell.",
+    )
     parser.add_argument("--version", action="version", version=f"softcell {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
-                                parser_class=_Parser)
+    sub = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=_Parser
+    )
     for name, (help_line, add) in COMMANDS.items():
         p = sub.add_parser(name, help=help_line, add_help=strict)
         if command is None or command == name:
@@ -695,16 +949,19 @@ def parse_arguments(argv: Sequence[str]) -> argparse.Namespace:
     if command not in WITH_COMPONENTS:
         return build_parser(command if command in COMMANDS else "").parse_args(argv)
     every = _component_specs(None)
-    first, unknown = build_parser(command, strict=False, specs=[s for s, _ in every.values()]
-                                  ).parse_known_args(argv)
+    first, unknown = build_parser(
+        command, strict=False, specs=[s for s, _ in every.values()]
+    ).parse_known_args(argv)
     if set(unknown) - {"-h", "--help"}:  # a mistyped flag: say so, with every flag known
         build_parser(command, specs=[s for s, _ in every.values()]).parse_args(argv)
     in_use = _chosen_components(first)
     specs = _component_specs(in_use)
     for name, (_, owner) in every.items():
         if name not in specs and getattr(first, f"param_{name}", None) is not None:
-            raise SoftcellError(f"{_flag(name)} is a parameter of {owner}, which this run does "
-                                f"not use (components: {_shown_components(in_use)})")
+            raise SoftcellError(
+                f"{_flag(name)} is a parameter of {owner}, which this run does "
+                f"not use (components: {_shown_components(in_use)})"
+            )
     return build_parser(command, specs=[s for s, _ in specs.values()]).parse_args(argv)
 
 
@@ -715,18 +972,24 @@ def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _component_flags(args: argparse.Namespace) -> dict[str, Any]:
-    components: dict[str, Any] = {k: v for k, v in (
-        ("driving_protocol", getattr(args, "protocol", None)),
-        ("friction_law", getattr(args, "friction_law", None)),
-        ("integrator", getattr(args, "integrator", None))) if v}
+    components: dict[str, Any] = {
+        k: v
+        for k, v in (
+            ("driving_protocol", getattr(args, "protocol", None)),
+            ("friction_law", getattr(args, "friction_law", None)),
+            ("integrator", getattr(args, "integrator", None)),
+        )
+        if v
+    }
     if getattr(args, "energy_terms", None):
         components["energy_terms"] = [s.strip() for s in args.energy_terms.split(",")]
     return components
 
 
 def _shown_components(components: dict[str, Any]) -> str:
-    return "; ".join(f"{kind} {', '.join(v) if isinstance(v, list) else v}"
-                     for kind, v in components.items())
+    return "; ".join(
+        f"{kind} {', '.join(v) if isinstance(v, list) else v}" for kind, v in components.items()
+    )
 
 
 def _note(line: str) -> None:
@@ -782,6 +1045,7 @@ def _plugin_warning(show):
             show(message, category, filename, lineno, file, line)
         else:
             default(message, category, filename, lineno, file, line)
+
     return dispatch
 
 

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 #: Options of every compiled kernel. ``fastmath`` stays off: the explicit reference must be
 #: reproducible to the last bit, and checkpoints must resume to the same bytes.
-JIT: dict[str, object] = {"cache": True, "fastmath": False,
-                          "error_model": "numpy", "nogil": True}
+JIT: dict[str, object] = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
 #: Options of the functions composed at run time from generated source (the sum of the energy
 #: terms, the integrators' loops): those of the kernels, but not cached on disk, as numba

@@ -30,21 +30,29 @@ def signed_distance(px: float, py: float, a: float, b: float) -> float:
     """Distance from (px, py) to the ellipse x^2/a^2 + y^2/b^2 = 1 in its own frame, negative
     inside: the closest of 4000 points of the boundary, refined by Brent's method on the
     boundary's angle parameter."""
+
     def squared(t: float) -> float:
         return (px - a * math.cos(t)) ** 2 + (py - b * math.sin(t)) ** 2
 
     grid = [2 * math.pi * i / 4000 for i in range(4000)]
     best = min(grid, key=squared)
     step = 2 * math.pi / 4000
-    found = minimize_scalar(squared, bounds=(best - step, best + step), method="bounded",
-                            options={"xatol": 1e-13})
+    found = minimize_scalar(
+        squared, bounds=(best - step, best + step), method="bounded", options={"xatol": 1e-13}
+    )
     distance = math.sqrt(min(squared(found.x), squared(best)))
     inside = (px / a) ** 2 + (py / b) ** 2 < 1.0
     return -distance if inside else distance
 
 
-def energy(modes: np.ndarray, n: int, params, pose=(0.0, 0.0, 0.0),
-           terms=("bending", "tension", "contact"), contact_cutoff: float = 25.0) -> float:
+def energy(
+    modes: np.ndarray,
+    n: int,
+    params,
+    pose=(0.0, 0.0, 0.0),
+    terms=("bending", "tension", "contact"),
+    contact_cutoff: float = 25.0,
+) -> float:
     """E = (2 pi / n) sum_m e_m (N cm) of the chosen terms, each density from its formula:
     bending k kappa^2 s, tension alpha (l0 / 2 pi) (2 pi s - l0)^2, contact
     (l0 / 2 pi) A exp(-rho / lambda) within ``contact_cutoff`` lambda of the bot."""
@@ -62,17 +70,31 @@ def energy(modes: np.ndarray, n: int, params, pose=(0.0, 0.0, 0.0),
         if "contact" in terms:
             c, si = math.cos(pose[2]), math.sin(pose[2])
             dx, dy = z[m].real - pose[0], z[m].imag - pose[1]
-            rho = signed_distance(c * dx + si * dy, -si * dx + c * dy,
-                                  params["bot_semi_major"], params["bot_semi_minor"])
+            rho = signed_distance(
+                c * dx + si * dy,
+                -si * dx + c * dy,
+                params["bot_semi_major"],
+                params["bot_semi_minor"],
+            )
             if rho <= contact_cutoff * params["contact_length"]:
-                e += (l0 / (2 * math.pi) * params["contact_amplitude"]
-                      * math.exp(-rho / params["contact_length"]))
+                e += (
+                    l0
+                    / (2 * math.pi)
+                    * params["contact_amplitude"]
+                    * math.exp(-rho / params["contact_length"])
+                )
         total += e
     return 2 * math.pi / n * total
 
 
-def force_modes(modes: np.ndarray, n: int, params, pose=(0.0, 0.0, 0.0),
-                terms=("bending", "tension", "contact"), step: float = 1e-6) -> np.ndarray:
+def force_modes(
+    modes: np.ndarray,
+    n: int,
+    params,
+    pose=(0.0, 0.0, 0.0),
+    terms=("bending", "tension", "contact"),
+    step: float = 1e-6,
+) -> np.ndarray:
     """f_hat_k from central differences of :func:`energy`:
     dE/dRe(g_k) + i dE/dIm(g_k) = -2 pi f_hat_k (docs/model.md §3)."""
     out = np.zeros(len(modes), dtype=complex)
@@ -82,8 +104,10 @@ def force_modes(modes: np.ndarray, n: int, params, pose=(0.0, 0.0, 0.0),
             plus, minus = modes.copy(), modes.copy()
             plus[j] += step * direction
             minus[j] -= step * direction
-            grad.append((energy(plus, n, params, pose, terms)
-                         - energy(minus, n, params, pose, terms)) / (2 * step))
+            grad.append(
+                (energy(plus, n, params, pose, terms) - energy(minus, n, params, pose, terms))
+                / (2 * step)
+            )
         out[j] = -(grad[0] + 1j * grad[1]) / (2 * math.pi)
     return out
 
@@ -98,8 +122,7 @@ def msd(positions: np.ndarray) -> list[float]:
         total, pairs = 0.0, 0
         for i in range(len(rows) - lag):
             if valid[i] and valid[i + lag]:
-                total += sum((x1 - x0) ** 2 for x0, x1 in zip(rows[i], rows[i + lag],
-                                                              strict=True))
+                total += sum((x1 - x0) ** 2 for x0, x1 in zip(rows[i], rows[i + lag], strict=True))
                 pairs += 1
         out.append(total / pairs if pairs else math.nan)
     return out

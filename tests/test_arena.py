@@ -21,8 +21,9 @@ TERMS = ["bending", "tension", "contact", "arena"]
 
 
 def _params(**values):
-    return Parameters({"radius": 4.0, "duration": 1.0, **values},
-                      get_registry().parameter_specs().values())
+    return Parameters(
+        {"radius": 4.0, "duration": 1.0, **values}, get_registry().parameter_specs().values()
+    )
 
 
 def _run(terms, duration, membrane=True, integrator="rodas4", seed=0, **values):
@@ -56,8 +57,19 @@ def test_second_derivatives_match_differences():
     term.hessian_kernel()(*w, pose, model.context, coefficients, *analytic)
     fallback = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
     fd_hessian(term.partials_kernel())(
-        w.copy(), pose, model.context, coefficients, np.array([1e-7] * 9), np.zeros(n),
-        np.zeros((6, n)), np.zeros((6, n)), np.zeros(3), np.zeros(3), np.zeros(3), *fallback)
+        w.copy(),
+        pose,
+        model.context,
+        coefficients,
+        np.array([1e-7] * 9),
+        np.zeros(n),
+        np.zeros((6, n)),
+        np.zeros((6, n)),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        *fallback,
+    )
     assert np.count_nonzero(analytic[0]) > 8
     assert np.abs(analytic[0] - fallback[0]).max() <= 1e-6 * np.abs(fallback[0]).max()
     # the bot's walls: at a corner, turned, within reach of two walls
@@ -69,8 +81,16 @@ def test_second_derivatives_match_differences():
     term.bot_hessian_kernel()(pose, model.context, coefficients, exact)
     _, differences = compose_bot([type(term)(params)])
     approx = np.zeros((3, 3))
-    differences(pose, model.context, (coefficients,), np.array([1e-8] * 9), np.zeros(3),
-                np.zeros(3), np.zeros(3), approx)  # the analytic kernel: bound as such
+    differences(
+        pose,
+        model.context,
+        (coefficients,),
+        np.array([1e-8] * 9),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        approx,
+    )  # the analytic kernel: bound as such
     assert np.array_equal(exact, approx)
     numeric = np.zeros((3, 3))
     for d in range(3):
@@ -120,8 +140,15 @@ def test_the_arena_keeps_the_membrane_and_the_bot_inside_over_a_long_run():
 def test_a_free_bot_stays_inside_the_walls(integrator):
     side = 8.0
     duration = 20.0 if integrator == "rodas4" else 0.5
-    model, (_, pose) = _run(["bending", "arena"], duration, membrane=False,
-                            integrator=integrator, arena_side=side, dt=1e-5, radius=3.2)
+    model, (_, pose) = _run(
+        ["bending", "arena"],
+        duration,
+        membrane=False,
+        integrator=integrator,
+        arena_side=side,
+        dt=1e-5,
+        radius=3.2,
+    )
     assert [t.name for t in model.terms] == ["arena"]  # a free bot keeps only the walls
     a, b = model.params.bot_semi_major, model.params.bot_semi_minor
     hx, hy = _half_widths(a, b, pose[:, 2])
@@ -131,8 +158,10 @@ def test_a_free_bot_stays_inside_the_walls(integrator):
     assert (np.abs(pose[:, 1]) + hy).max() < side / 2 + lam
     if integrator == "rodas4":
         # it did reach them: the bot runs 15 cm/s, the walls are ~2 cm away
-        assert max((np.abs(pose[:, 0]) + hx).max(), (np.abs(pose[:, 1]) + hy).max()) > \
-            side / 2 - 5 * lam
+        assert (
+            max((np.abs(pose[:, 0]) + hx).max(), (np.abs(pose[:, 1]) + hy).max())
+            > side / 2 - 5 * lam
+        )
 
 
 def test_walls_never_reached_change_nothing_to_the_byte():
@@ -148,9 +177,27 @@ def test_an_arena_too_small_is_refused_with_the_bound():
 
 def test_the_command_line_simulates_a_free_bot_in_the_arena(tmp_path):
     out = tmp_path / "free"
-    assert main(["simulate", "--free-bot", "--energy-terms", "arena", "--arena-side", "10",
-                 "--radius", "4", "--duration", "2", "--realizations", "1", "-o",
-                 str(out)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--free-bot",
+                "--energy-terms",
+                "arena",
+                "--arena-side",
+                "10",
+                "--radius",
+                "4",
+                "--duration",
+                "2",
+                "--realizations",
+                "1",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     ds = read_dataset(next(out.glob("*.nc")))
     assert '"energy_terms": ["arena"]' in ds.attrs["softcell_components"]
     assert float(np.abs(ds["bot_x"]).max()) < 5.0

@@ -8,8 +8,15 @@ import pytest
 from softcell.workflows.beyond import VARIANTS, Variant, beyond
 from softcell.workflows.reproduce import Design, VideoDesign
 
-TINY = Design("tiny", radii=(4.0, 12.0), realizations=1, duration=20.0, discard=5.0,
-              free_bot_realizations=1, video=VideoDesign(radius=12.0, span=3.0))
+TINY = Design(
+    "tiny",
+    radii=(4.0, 12.0),
+    realizations=1,
+    duration=20.0,
+    discard=5.0,
+    free_bot_realizations=1,
+    video=VideoDesign(radius=12.0, span=3.0),
+)
 
 
 def test_the_variants_are_the_studys():
@@ -17,18 +24,25 @@ def test_the_variants_are_the_studys():
     assert names == ["viscous", "coulomb_3e-05", "coulomb_0.0001", "coulomb_0.0003", "arena"]
     design = VARIANTS[2].design(TINY)
     assert design.components["friction_law"] == "coulomb"
-    assert design.parameters == {"membrane_static_friction": 1e-4,
-                                 "static_friction_width": 1e-5}
+    assert design.parameters == {"membrane_static_friction": 1e-4, "static_friction_width": 1e-5}
     assert "arena" in VARIANTS[4].design(TINY).components["energy_terms"]
 
 
 @pytest.mark.slow
 def test_beyond_compares_the_variants_on_common_random_numbers(tmp_path):
-    variants = (VARIANTS[0], Variant("coulomb_0", "coulomb, f_s = 0",
-                                     {"friction_law": "coulomb"},
-                                     {"membrane_static_friction": 0.0}), VARIANTS[4])
-    report = beyond(tmp_path, seed=3, workers=1, variants=variants, base=TINY,
-                    progress=False, log=None)
+    variants = (
+        VARIANTS[0],
+        Variant(
+            "coulomb_0",
+            "coulomb, f_s = 0",
+            {"friction_law": "coulomb"},
+            {"membrane_static_friction": 0.0},
+        ),
+        VARIANTS[4],
+    )
+    report = beyond(
+        tmp_path, seed=3, workers=1, variants=variants, base=TINY, progress=False, log=None
+    )
     text = report.read_text()
     assert "| finding |" in text and "coulomb, f_s = 0" in text
     assert (tmp_path / "figures" / "friction.png").exists()

@@ -84,8 +84,9 @@ def test_an_opencv_calibration_file_replaces_the_estimated_lens(simulated, tmp_p
     storage.release()
     from softcell.core.camera import read_calibration
 
-    camera = calibrate_from_plate(still(scene, simulated, tmp_path), PLATE,
-                                  calibration=read_calibration(path))
+    camera = calibrate_from_plate(
+        still(scene, simulated, tmp_path), PLATE, calibration=read_calibration(path)
+    )
     assert np.allclose(camera.position, scene.center, rtol=0.01, atol=0.3)
     x, y = np.random.default_rng(1).uniform(5, PLATE - 5, (2, 300))
     u, v = scene.project(x, y, 1.5)
@@ -107,8 +108,7 @@ def test_every_effect_with_a_visible_wall(simulated, tmp_path):
     """Tilt, lens, vignetting, soft shadows (the lamp arm's and the bot's and wall's own),
     Bayer noise, motion blur, MPEG-4 4:2:0 and orange paper with a highlight, 3 mm wall,
     calibrated from the plate alone: the issue's targets on 16 frames."""
-    footage = film(simulated, tmp_path / "cell.mp4", every_effect(0.3), offset=OFFSET,
-                   end=0.5)
+    footage = film(simulated, tmp_path / "cell.mp4", every_effect(0.3), offset=OFFSET, end=0.5)
     tracked = track(footage.path, plate_size=PLATE, radius=8.0, **HEIGHTS)
     softcell.validate(tracked)
     share, gc, bot, heading = errors(tracked, footage)
@@ -117,16 +117,20 @@ def test_every_effect_with_a_visible_wall(simulated, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("wall, share_target, gc_target, bot_target, heading_target", [
-    (0.3, 0.98, 0.05, 0.1, 5.0),     # a visible wall: every target
-    (0.01, 0.90, 0.1, None, None),   # the paper's 0.1 mm wall, seen edge-on in places
-])
-def test_every_effect_two_seconds(simulated, tmp_path, wall, share_target, gc_target,
-                                  bot_target, heading_target):
-    footage = film(simulated, tmp_path / "cell.mp4", every_effect(wall), offset=OFFSET,
-                   end=2.0)
-    tracked = track(footage.path, plate_size=PLATE, radius=8.0,
-                    overlay=tmp_path / "qa.mkv", **HEIGHTS)
+@pytest.mark.parametrize(
+    "wall, share_target, gc_target, bot_target, heading_target",
+    [
+        (0.3, 0.98, 0.05, 0.1, 5.0),  # a visible wall: every target
+        (0.01, 0.90, 0.1, None, None),  # the paper's 0.1 mm wall, seen edge-on in places
+    ],
+)
+def test_every_effect_two_seconds(
+    simulated, tmp_path, wall, share_target, gc_target, bot_target, heading_target
+):
+    footage = film(simulated, tmp_path / "cell.mp4", every_effect(wall), offset=OFFSET, end=2.0)
+    tracked = track(
+        footage.path, plate_size=PLATE, radius=8.0, overlay=tmp_path / "qa.mkv", **HEIGHTS
+    )
     share, gc, bot, heading = errors(tracked, footage)
     assert share >= share_target and gc < gc_target, (share, gc, bot, heading)
     if bot_target is not None:
@@ -142,21 +146,22 @@ def test_lost_frames_are_counted_by_kind_and_marked_in_the_overlay(simulated, tm
     scene = replace(Scene(), tilt=(2.0, -2.2))
     footage = film(simulated, tmp_path / "cell.mkv", scene, offset=OFFSET, end=0.2)
     reader = cv2.VideoCapture(str(footage.path))
-    writer = cv2.VideoWriter(str(tmp_path / "hand.mkv"), cv2.VideoWriter_fourcc(*"FFV1"), 30,
-                             (1024, 1024))
+    writer = cv2.VideoWriter(
+        str(tmp_path / "hand.mkv"), cv2.VideoWriter_fourcc(*"FFV1"), 30, (1024, 1024)
+    )
     u, v = (int(c) for c in scene.project(*OFFSET))
     for index in range(footage.times.size):
         ok, image = reader.read()
         if index == 3:
-            image[v - 120:v + 120, u - 120:u + 120] = (120, 140, 170)  # skin over the cell
+            image[v - 120 : v + 120, u - 120 : u + 120] = (120, 140, 170)  # skin over the cell
         writer.write(image)
     writer.release()
-    tracked = track(tmp_path / "hand.mkv", plate_size=PLATE, overlay=tmp_path / "qa.mkv",
-                    radius=8.0, **HEIGHTS)
+    tracked = track(
+        tmp_path / "hand.mkv", plate_size=PLATE, overlay=tmp_path / "qa.mkv", radius=8.0, **HEIGHTS
+    )
     flags = tracked.tracking_flag.values[0]
     assert flags[3] == FLAGS["both_lost"] and (np.delete(flags, 3) == FLAGS["ok"]).all()
-    assert tracked.attrs["softcell_tracking_failures"] == \
-        '{"membrane: no paper seen": 1}'
+    assert tracked.attrs["softcell_tracking_failures"] == '{"membrane: no paper seen": 1}'
     overlay = cv2.VideoCapture(str(tmp_path / "qa.mkv"))
     frames = [overlay.read()[1] for _ in range(footage.times.size)]
     red = [int(np.sum((f[:60, :, 2] > 200) & (f[:60, :, 1] < 60))) for f in frames]
@@ -185,8 +190,21 @@ def test_bad_camera_requests_are_named(simulated, tmp_path, capsys):
     wrong = r"perimeter not within 10% of 2 pi R \(is the scale right"
     with pytest.raises(SoftcellError, match=wrong):
         track(video, plate_size=2 * PLATE, radius=8.0)  # a wrong plate size
-    assert main(["track", str(video), "--plate-size", "80", "-o", str(tmp_path / "t.nc"),
-                 "--overlay", str(video)]) == 2
+    assert (
+        main(
+            [
+                "track",
+                str(video),
+                "--plate-size",
+                "80",
+                "-o",
+                str(tmp_path / "t.nc"),
+                "--overlay",
+                str(video),
+            ]
+        )
+        == 2
+    )
     assert "is the input" in capsys.readouterr().err
     assert main(["track", str(video), "--plate-size", "-3", "-o", str(tmp_path / "t.nc")]) == 2
     assert "plate_size = -3.0 is not allowed" in capsys.readouterr().err
@@ -195,9 +213,26 @@ def test_bad_camera_requests_are_named(simulated, tmp_path, capsys):
 def test_cli_track_from_the_plate_with_an_overlay(simulated, tmp_path, capsys):
     scene = replace(Scene(), tilt=(2.0, -2.2), k1=-0.1)
     footage = film(simulated, tmp_path / "cell.mkv", scene, offset=OFFSET, end=0.1)
-    assert main(["track", str(footage.path), "--plate-size", "80", "--ring-height", "3",
-                 "--bot-height", "2.5", "--quiet", "-o", str(tmp_path / "t.nc"),
-                 "--overlay", str(tmp_path / "qa.mp4")]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(footage.path),
+                "--plate-size",
+                "80",
+                "--ring-height",
+                "3",
+                "--bot-height",
+                "2.5",
+                "--quiet",
+                "-o",
+                str(tmp_path / "t.nc"),
+                "--overlay",
+                str(tmp_path / "qa.mp4"),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "4 frames tracked" in out and "overlay written" in out
     tracked = softcell.open_dataset(tmp_path / "t.nc")
@@ -206,10 +241,21 @@ def test_cli_track_from_the_plate_with_an_overlay(simulated, tmp_path, capsys):
 
 
 def test_paper_of_another_colour_is_named(simulated, tmp_path):
-    footage = film(simulated, tmp_path / "blue.mkv", replace(Scene(), paper=(200, 90, 40)),
-                   offset=OFFSET, end=0.1)
-    tracked = track(footage.path, plate_size=PLATE, camera_height=150.0, radius=8.0,
-                    ring_color="blue", **HEIGHTS)
+    footage = film(
+        simulated,
+        tmp_path / "blue.mkv",
+        replace(Scene(), paper=(200, 90, 40)),
+        offset=OFFSET,
+        end=0.1,
+    )
+    tracked = track(
+        footage.path,
+        plate_size=PLATE,
+        camera_height=150.0,
+        radius=8.0,
+        ring_color="blue",
+        **HEIGHTS,
+    )
     share, gc, _, _ = errors(tracked, footage)
     assert share == 1 and gc < 0.02, (share, gc)
     with pytest.raises(SoftcellError, match="no plausible ring"):

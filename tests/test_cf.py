@@ -28,21 +28,39 @@ def cfchecks(path):
     import compliance_checker
 
     names = Path(compliance_checker.__file__).parent / "data" / "cf-standard-name-table.xml"
-    run = subprocess.run([program, "-s", str(names), "-a", str(HERE / "area-type-table.xml"),
-                          "-r", str(HERE / "standardized-region-list.xml"), str(path)],
-                         capture_output=True, text=True, cwd=path.parent)
+    run = subprocess.run(
+        [
+            program,
+            "-s",
+            str(names),
+            "-a",
+            str(HERE / "area-type-table.xml"),
+            "-r",
+            str(HERE / "standardized-region-list.xml"),
+            str(path),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=path.parent,
+    )
     return run.stdout + run.stderr
 
 
 def test_cfchecks_reports_no_errors(tmp_path):
     rng = np.random.default_rng(0)
     ds = simulation_dataset(
-        np.r_[np.arange(5) * 0.01, 0.1 + np.arange(3) * 0.1], np.arange(2),
-        membrane_x=rng.normal(size=(2, 8, 64)), membrane_y=rng.normal(size=(2, 8, 64)),
-        bot_x=rng.normal(size=(2, 8)), bot_y=rng.normal(size=(2, 8)),
-        bot_angle=rng.normal(size=(2, 8)), bot_phase=rng.integers(0, 2, size=(2, 8)),
-        parameters=Parameters({"radius": 5}), seed=11,
-        components={"integrator": "explicit_euler"})
+        np.r_[np.arange(5) * 0.01, 0.1 + np.arange(3) * 0.1],
+        np.arange(2),
+        membrane_x=rng.normal(size=(2, 8, 64)),
+        membrane_y=rng.normal(size=(2, 8, 64)),
+        bot_x=rng.normal(size=(2, 8)),
+        bot_y=rng.normal(size=(2, 8)),
+        bot_angle=rng.normal(size=(2, 8)),
+        bot_phase=rng.integers(0, 2, size=(2, 8)),
+        parameters=Parameters({"radius": 5}),
+        seed=11,
+        components={"integrator": "explicit_euler"},
+    )
     report = cfchecks(write_dataset(ds, tmp_path / "sim.nc"))
     assert "ERRORS detected: 0" in report and "WARNINGS given: 0" in report, report
 
@@ -51,8 +69,15 @@ def _analysis_of_a_sweep():
     rng = np.random.default_rng(1)
     parts = []
     for radius in (8.0, 10.0):
-        ds = stop_and_go_dataset(rng, 0.01 * np.arange(2000), realizations=2, speed=1.0,
-                                 mean_go=0.3, mean_stop=0.3, radius=radius)
+        ds = stop_and_go_dataset(
+            rng,
+            0.01 * np.arange(2000),
+            realizations=2,
+            speed=1.0,
+            mean_go=0.3,
+            mean_stop=0.3,
+            radius=radius,
+        )
         parts.extend(ds.isel(realization=[r]).assign_coords(realization=[r]) for r in (0, 1))
     sweep = combine_sweep(parts)
     assert sweep.sizes["radius"] == 2
@@ -72,9 +97,12 @@ def test_analysis_file_passes_cfchecks_and_reads_back(tmp_path):
     assert '"discard": 1.0' in back.attrs["softcell_analysis_options"]
 
 
-@pytest.mark.xfail(strict=True, reason="cfchecker 4.1.0, the newest, rejects every netCDF-4 "
-                   "string variable (measured: 2 errors on an analysis file, code 2.2, 'vlen "
-                   "types not supported'), so text stays in CF character arrays")
+@pytest.mark.xfail(
+    strict=True,
+    reason="cfchecker 4.1.0, the newest, rejects every netCDF-4 "
+    "string variable (measured: 2 errors on an analysis file, code 2.2, 'vlen "
+    "types not supported'), so text stays in CF character arrays",
+)
 def test_netcdf4_string_labels_would_pass_cfchecks(tmp_path, monkeypatch):
     import netCDF4
 

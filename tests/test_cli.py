@@ -23,8 +23,9 @@ def test_plugins_lists_the_four_kinds(capsys):
 def test_bad_parameter_is_one_line_and_status_2():
     run = subprocess.run([*PY, "params", "--radius", "2.5"], capture_output=True, text=True)
     assert run.returncode == 2
-    assert run.stderr.strip() == ("softcell: error: parameter radius = 2.5 cm is not allowed: "
-                                  "must be > bot_semi_major = 3 cm")
+    assert run.stderr.strip() == (
+        "softcell: error: parameter radius = 2.5 cm is not allowed: must be > bot_semi_major = 3 cm"
+    )
     assert "Traceback" not in run.stderr
 
 
@@ -44,17 +45,39 @@ def test_config_file_and_flags(tmp_path, capsys):
 
 
 def test_import_compiles_nothing_and_skips_heavy_modules():
-    code = ("import sys, softcell; heavy = [m for m in ('numba', 'xarray', 'netCDF4', "
-            "'matplotlib', 'cv2', 'dask') if m in sys.modules]; print(heavy)")
+    code = (
+        "import sys, softcell; heavy = [m for m in ('numba', 'xarray', 'netCDF4', "
+        "'matplotlib', 'cv2', 'dask') if m in sys.modules]; print(heavy)"
+    )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert run.stdout.strip() == "[]"
 
 
 def test_analyze_a_simulated_sweep(tmp_path, capsys):
     run = tmp_path / "run"
-    assert main(["simulate", "--radius", "4,12", "--duration", "0.3", "--dt", "1e-5",
-                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--quiet",
-                 "-o", str(run)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--radius",
+                "4,12",
+                "--duration",
+                "0.3",
+                "--dt",
+                "1e-5",
+                "--cutoff",
+                "4",
+                "--nodes",
+                "64",
+                "--stored-nodes",
+                "16",
+                "--quiet",
+                "-o",
+                str(run),
+            ]
+        )
+        == 0
+    )
     out = tmp_path / "analysis.nc"
     for _ in range(2):  # the second time, its own earlier output is replaced
         assert main(["analyze", str(run), "-o", str(out), "--discard", "0.05", "--quiet"]) == 0
@@ -62,8 +85,12 @@ def test_analyze_a_simulated_sweep(tmp_path, capsys):
     # An analysis file inside a sweep directory is left out of the sweep; writing one there
     # is refused (it is inside an input), so it is placed there by hand.
     shutil.copy(out, run / "analysis.nc")
-    assert main(["analyze", str(run), "-o", str(tmp_path / "again.nc"), "--discard", "0.05",
-                 "--quiet"]) == 0
+    assert (
+        main(
+            ["analyze", str(run), "-o", str(tmp_path / "again.nc"), "--discard", "0.05", "--quiet"]
+        )
+        == 0
+    )
     assert "1 realization(s) at 2 radius" in capsys.readouterr().out
     result = softcell.open_dataset(out)
     assert list(result.radius.values) == [4.0, 12.0]
@@ -74,11 +101,13 @@ def test_analyze_a_simulated_sweep(tmp_path, capsys):
 
 
 def test_version_and_help_import_no_numba_xarray_or_registry():
-    code = ("import sys\nfrom softcell.cli import main\n"
-            "for argv in (['--version'], ['--help']):\n"
-            "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
-            "heavy = [m for m in ('numba', 'xarray', 'softcell.core.plugin.registry', 'scipy')"
-            " if m in sys.modules]\nprint('HEAVY', heavy)\n")
+    code = (
+        "import sys\nfrom softcell.cli import main\n"
+        "for argv in (['--version'], ['--help']):\n"
+        "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
+        "heavy = [m for m in ('numba', 'xarray', 'softcell.core.plugin.registry', 'scipy')"
+        " if m in sys.modules]\nprint('HEAVY', heavy)\n"
+    )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert f"softcell {softcell.__version__}" in run.stdout
     assert "HEAVY []" in run.stdout, run.stdout
@@ -98,15 +127,34 @@ def test_component_flags_only_for_the_components_in_use(tmp_path, capsys):
     config = tmp_path / "explicit.toml"
     config.write_text('[components]\nintegrator = "explicit_euler"\n')
     assert main(["params", str(config), "--atol", "1e-7"]) == 2
-    assert capsys.readouterr().err.strip().startswith(
-        "softcell: error: --atol is a parameter of integrator 'rodas4', which this run does not "
-        "use (components:")
-    assert main(["simulate", "--integrator", "explicit_euler", "--atol", "1e-7",
-                 "-o", str(tmp_path / "out")]) == 2
+    assert (
+        capsys.readouterr()
+        .err.strip()
+        .startswith(
+            "softcell: error: --atol is a parameter of integrator 'rodas4', which this run "
+            "does not use (components:"
+        )
+    )
+    assert (
+        main(
+            [
+                "simulate",
+                "--integrator",
+                "explicit_euler",
+                "--atol",
+                "1e-7",
+                "-o",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 2
+    )
     assert "--atol is a parameter of integrator 'rodas4'" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
-    for argv, shown in ((["simulate", "--help"], True),
-                        (["simulate", "--integrator", "explicit_euler", "--help"], False)):
+    for argv, shown in (
+        (["simulate", "--help"], True),
+        (["simulate", "--integrator", "explicit_euler", "--help"], False),
+    ):
         try:
             main(argv)
         except SystemExit as stop:

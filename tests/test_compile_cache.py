@@ -74,8 +74,13 @@ def _plugin(folder: Path, factor: float) -> Path:
 
 def _child(cache: Path, plugin: Path, source: Path) -> subprocess.Popen:
     env = {**os.environ, compiled.CACHE_ENV: str(cache)}
-    return subprocess.Popen([sys.executable, "-c", CHILD, str(plugin), str(source)], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(plugin), str(source)],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _result(process: subprocess.Popen) -> dict:
@@ -86,7 +91,8 @@ def _result(process: subprocess.Popen) -> dict:
 
 
 def test_a_second_process_reads_the_compiled_function_and_a_changed_plugin_recompiles(
-        cache, tmp_path):
+    cache, tmp_path
+):
     source = tmp_path / "source.py"
     source.write_text(SOURCE)
     plugin = _plugin(tmp_path / "site", 2.0)
@@ -198,14 +204,14 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
     from softcell.plugins.run_and_tumble import run_and_tumble_drive
 
     text = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
-    (block,) = [b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)
-                if "compile_module" in b]
+    (block,) = [
+        b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S) if "compile_module" in b
+    ]
     namespace: dict = {}
     exec(compile(block, "docs/plugins.md", "exec"), namespace)
     loop = namespace["build_loop"](SimpleNamespace(drive=run_and_tumble_drive))
     out, expected = np.zeros(3), np.zeros(3)
-    args = (0, 1.0, np.array([1.0, 2.0, 0.5]), np.array([10.0, 3.0, 2.0]),
-            np.array([0.04, 150.0]))
+    args = (0, 1.0, np.array([1.0, 2.0, 0.5]), np.array([10.0, 3.0, 2.0]), np.array([0.04, 150.0]))
     loop(*args, out)
     run_and_tumble_drive(*args, expected)
     assert np.array_equal(out, expected) and np.any(out != 0.0)
@@ -239,8 +245,13 @@ def test_the_built_in_model_is_compiled_once_per_machine(cache):
     env = {**os.environ, compiled.CACHE_ENV: str(cache)}
     runs = []
     for _ in range(2):
-        done = subprocess.run([sys.executable, "-c", MODEL_CHILD], env=env,
-                              capture_output=True, text=True, timeout=600)
+        done = subprocess.run(
+            [sys.executable, "-c", MODEL_CHILD],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         assert done.returncode == 0, done.stderr
         runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
     assert (runs[0]["hits"], runs[0]["misses"]) == (0, 1)

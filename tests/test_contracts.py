@@ -18,8 +18,9 @@ from softcell.testing import registered
 
 
 @njit
-def partials_missing_dpose(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                           p0x, p0y, p1x, p1y, p2x, p2y):  # one argument short
+def partials_missing_dpose(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y
+):  # one argument short
     for n in range(x.size):
         p0x[n] += coefficients[0] * x[n]
 
@@ -58,24 +59,38 @@ class BadDrive(RunAndTumble):
 
 PLUGIN = types.SimpleNamespace(
     softcell_energy_terms=softcell.hookimpl(lambda: [ShortTerm, PlainTerm]),
-    softcell_driving_protocols=softcell.hookimpl(lambda: [BadDrive]))
+    softcell_driving_protocols=softcell.hookimpl(lambda: [BadDrive]),
+)
 
 
-@pytest.mark.parametrize("terms, protocol, message", [
-    (["bending", "short_term"], "run_and_tumble",
-     r"^registered object 'test_plugin': energy term 'short_term': "
-     r"partials_kernel\(\) does not compile for the "
-     r"contract's signature void\(float64\[::1\], .*\): Signature mismatch: 16 argument types "
-     r"given, but function takes 15 arguments$"),
-    (["plain_term"], "run_and_tumble",
-     r"^registered object 'test_plugin': energy term 'plain_term': "
-     r"partials_kernel\(\) returned <function .*>, "
-     r"not a numba.njit function$"),
-    (["bending"], "bad_drive",
-     r"^registered object 'test_plugin': driving protocol 'bad_drive': "
-     r"drive_kernel\(\) does not compile for the "
-     r"contract's signature void\(int8, float64, .*\): .*setitem"),
-])
+@pytest.mark.parametrize(
+    "terms, protocol, message",
+    [
+        (
+            ["bending", "short_term"],
+            "run_and_tumble",
+            r"^registered object 'test_plugin': energy term 'short_term': "
+            r"partials_kernel\(\) does not compile for the "
+            r"contract's signature void\(float64\[::1\], .*\): Signature mismatch: "
+            r"16 argument types "
+            r"given, but function takes 15 arguments$",
+        ),
+        (
+            ["plain_term"],
+            "run_and_tumble",
+            r"^registered object 'test_plugin': energy term 'plain_term': "
+            r"partials_kernel\(\) returned <function .*>, "
+            r"not a numba.njit function$",
+        ),
+        (
+            ["bending"],
+            "bad_drive",
+            r"^registered object 'test_plugin': driving protocol 'bad_drive': "
+            r"drive_kernel\(\) does not compile for the "
+            r"contract's signature void\(int8, float64, .*\): .*setitem",
+        ),
+    ],
+)
 def test_a_kernel_that_breaks_its_contract_stops_the_build(terms, protocol, message):
     with registered(PLUGIN):
         with pytest.raises(ContractError, match=message) as info:
@@ -85,13 +100,27 @@ def test_a_kernel_that_breaks_its_contract_stops_the_build(terms, protocol, mess
 
 def test_the_command_line_reports_it_in_one_line_with_exit_2(tmp_path, capsys):
     with registered(PLUGIN):
-        status = main(["simulate", "--radius", "4", "--duration", "0.01", "--quiet",
-                       "--energy-terms", "bending,tension,short_term", "-o", str(tmp_path)])
+        status = main(
+            [
+                "simulate",
+                "--radius",
+                "4",
+                "--duration",
+                "0.01",
+                "--quiet",
+                "--energy-terms",
+                "bending,tension,short_term",
+                "-o",
+                str(tmp_path),
+            ]
+        )
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2
     assert len(err) == 1
-    assert err[0].startswith("softcell: error: registered object 'test_plugin': energy term "
-                             "'short_term': partials_kernel()")
+    assert err[0].startswith(
+        "softcell: error: registered object 'test_plugin': energy term "
+        "'short_term': partials_kernel()"
+    )
     assert not list(tmp_path.glob("*.nc"))
 
 

@@ -25,8 +25,21 @@ import softcell
 from softcell.cli import main
 
 PY = [sys.executable, "-m", "softcell"]
-SMALL = ["--duration", "0.3", "--dt", "1e-5", "--cutoff", "4", "--nodes", "64",
-         "--stored-nodes", "16", "--integrator", "explicit_euler", "--quiet"]
+SMALL = [
+    "--duration",
+    "0.3",
+    "--dt",
+    "1e-5",
+    "--cutoff",
+    "4",
+    "--nodes",
+    "64",
+    "--stored-nodes",
+    "16",
+    "--integrator",
+    "explicit_euler",
+    "--quiet",
+]
 
 
 def tree_hash(folder: Path) -> str:
@@ -45,12 +58,30 @@ def world(tmp_path_factory):
     and files that are not what they claim to be."""
     w = tmp_path_factory.mktemp("world")
     assert main(["simulate", "--radius", "4,5", *SMALL, "-o", str(w / "sim")]) == 0
-    assert main(["analyze", str(w / "sim"), "-o", str(w / "an.nc"), "--discard", "0.05",
-                 "--quiet"]) == 0
-    assert main(["render", str(w / "sim"), "--point", "radius=0", "-o", str(w / "v.mkv"),
-                 "--quiet"]) == 0
-    assert main(["track", str(w / "v.mkv"), "--px-per-cm", "10", "--radius", "4", "-o",
-                 str(w / "tr.nc"), "--quiet"]) == 0
+    assert (
+        main(["analyze", str(w / "sim"), "-o", str(w / "an.nc"), "--discard", "0.05", "--quiet"])
+        == 0
+    )
+    assert (
+        main(["render", str(w / "sim"), "--point", "radius=0", "-o", str(w / "v.mkv"), "--quiet"])
+        == 0
+    )
+    assert (
+        main(
+            [
+                "track",
+                str(w / "v.mkv"),
+                "--px-per-cm",
+                "10",
+                "--radius",
+                "4",
+                "-o",
+                str(w / "tr.nc"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     (w / "empty.nc").write_bytes(b"")
     whole = (w / "sim" / "point000_realization0000.nc").read_bytes()
     (w / "trunc.nc").write_bytes(whole[: len(whole) // 2])
@@ -73,30 +104,46 @@ def world(tmp_path_factory):
 #: (command line, words the one-line message must contain). ``W`` is the world folder.
 BAD = [
     # Resume only what matches (the sweep in W/sim was made with radius 4,5 and SMALL).
-    (["simulate", "--radius", "4,6", *SMALL, "-o", "W/sim"],
-     ["radius = 5.0 there, 6.0 in this request", "--overwrite"]),
-    (["simulate", "--radius", "4,5", *SMALL, "--seed", "3", "-o", "W/sim"],
-     ["seed = 0 there, 3 in this request"]),
-    (["simulate", "--radius", "4,5", *SMALL, "--duration", "0.2", "-o", "W/sim"],
-     ["duration = 0.3 there, 0.2 in this request"]),
-    (["simulate", "--radius", "4,5", *SMALL, "--energy-terms", "bending,tension", "-o",
-      "W/sim"], ['energy_terms = ["bending", "tension", "contact"] there']),
-    (["simulate", "--radius", "4", *SMALL, "-o", "W/sim"],
-     ["no part of this request", "point001_realization0000.nc"]),
+    (
+        ["simulate", "--radius", "4,6", *SMALL, "-o", "W/sim"],
+        ["radius = 5.0 there, 6.0 in this request", "--overwrite"],
+    ),
+    (
+        ["simulate", "--radius", "4,5", *SMALL, "--seed", "3", "-o", "W/sim"],
+        ["seed = 0 there, 3 in this request"],
+    ),
+    (
+        ["simulate", "--radius", "4,5", *SMALL, "--duration", "0.2", "-o", "W/sim"],
+        ["duration = 0.3 there, 0.2 in this request"],
+    ),
+    (
+        ["simulate", "--radius", "4,5", *SMALL, "--energy-terms", "bending,tension", "-o", "W/sim"],
+        ['energy_terms = ["bending", "tension", "contact"] there'],
+    ),
+    (
+        ["simulate", "--radius", "4", *SMALL, "-o", "W/sim"],
+        ["no part of this request", "point001_realization0000.nc"],
+    ),
     # An output never destroys an input.
-    (["analyze", "W/sim", "-o", "W/sim/point000_realization0000.nc"],
-     ["inside the input directory"]),
+    (
+        ["analyze", "W/sim", "-o", "W/sim/point000_realization0000.nc"],
+        ["inside the input directory"],
+    ),
     (["analyze", "W/sim", "-o", "W/sim/new.nc"], ["inside the input directory"]),
     (["analyze", "W/an.nc", "-o", "W/an.nc"], ["is the input"]),
     (["track", "W/v.mkv", "--px-per-cm", "10", "-o", "W/v.mkv"], ["is the input"]),
     (["render", "W/sim", "--point", "radius=0", "-o", "W/v.mkv"], ["exists", "--overwrite"]),
     (["analyze", "W/sim", "-o", "W/notes.txt"], ["not a softcell analysis file", "--overwrite"]),
-    (["track", "W/v.mkv", "--px-per-cm", "10", "-o", "W/an.nc"],
-     ["is a softcell analysis file", "--overwrite"]),
+    (
+        ["track", "W/v.mkv", "--px-per-cm", "10", "-o", "W/an.nc"],
+        ["is a softcell analysis file", "--overwrite"],
+    ),
     (["figures", "W/an.nc", "-o", "W/an.nc"], ["is the input"]),
     (["figures", "W/an.nc", "--simulations", "W/sim", "-o", "W/sim"], ["is the input"]),
-    (["figures", "W/an.nc", "--simulations", "W/sim", "-o", "W/sim/figs"],
-     ["inside the input directory"]),
+    (
+        ["figures", "W/an.nc", "--simulations", "W/sim", "-o", "W/sim/figs"],
+        ["inside the input directory"],
+    ),
     (["figures", "W/an.nc", "-o", "W"], ["holds the input"]),
     (["simulate", "--radius", "4", *SMALL, "-o", "W/an.nc"], ["existing file, not a directory"]),
     (["analyze", "W/sim", "-o", "W"], ["is a directory"]),
@@ -107,13 +154,17 @@ BAD = [
     (["simulate", "--seed", "-1", "-o", "W/new"], ["seed = -1", "2**64 - 1"]),
     (["simulate", "--seed", str(2**64), "-o", "W/new"], [f"seed = {2**64}", "2**64 - 1"]),
     (["simulate", "W/bad_seed.toml", "-o", "W/new"], ["seed = -4"]),
-    (["simulate", "--duration", "1e12", "-o", "W/new"],
-     ["duration = 1000000000000.0 s", "must be <=", "memory"]),
+    (
+        ["simulate", "--duration", "1e12", "-o", "W/new"],
+        ["duration = 1000000000000.0 s", "must be <=", "memory"],
+    ),
     (["params", "--duration", "1e12"], ["duration = 1000000000000.0 s", "memory"]),
     (["simulate", "--nodes", str(2**30), "-o", "W/new"], [f"nodes = {2**30}", "memory"]),
     (["params", "--nodes", str(2**30)], [f"nodes = {2**30}", "memory"]),
-    (["simulate", "--radius", "1e300", "-o", "W/new"],
-     ["radius = 1e+300 cm", "must be <= 4.5e+09 cm", "float64"]),
+    (
+        ["simulate", "--radius", "1e300", "-o", "W/new"],
+        ["radius = 1e+300 cm", "must be <= 4.5e+09 cm", "float64"],
+    ),
     (["params", "--radius", "1e300"], ["radius = 1e+300 cm", "float64"]),
     (["simulate", "--radius", "inf", "-o", "W/new"], ["radius = inf cm", "must be finite"]),
     (["simulate", "--realizations", "0", "-o", "W/new"], ["realizations = 0", ">= 1"]),
@@ -121,11 +172,15 @@ BAD = [
     (["simulate", "--integrator", "rodaz4", "-o", "W/new"], ["'rodaz4'", "did you mean 'rodas4'"]),
     (["simulate", "W/bad_integrator.toml", "-o", "W/new"], ["'rodaz4'"]),
     (["params", "W/bad_detector.toml"], ["'treshold'", "did you mean 'threshold'"]),
-    (["simulate", "--energy-terms", "bending,bending", "-o", "W/new"],
-     ["'bending' is named twice"]),
+    (
+        ["simulate", "--energy-terms", "bending,bending", "-o", "W/new"],
+        ["'bending' is named twice"],
+    ),
     (["simulate", "--scheduler", "bogus://x", "-o", "W/new"], ["'bogus://x'", "tcp"]),
-    (["simulate", "--scheduler", "tcp://127.0.0.1:1", "-o", "W/new"],
-     ["cannot reach the dask scheduler", "refused"]),
+    (
+        ["simulate", "--scheduler", "tcp://127.0.0.1:1", "-o", "W/new"],
+        ["cannot reach the dask scheduler", "refused"],
+    ),
     (["simulate", "--checkpoint-every", "0", "-o", "W/new"], ["checkpoint-every = 0.0 s"]),
     (["simulate", "--seed", "x", "-o", "W/new"], ["invalid int value: 'x'"]),
     # Unreadable or unsuitable inputs.
@@ -135,40 +190,62 @@ BAD = [
     (["figures", "W/trunc.nc", "-o", "W/figs"], ["truncated or corrupt"]),
     (["render", "W/empty.nc", "-o", "W/out.mkv"], ["empty (0 bytes)"]),
     (["render", "W/trunc.nc", "-o", "W/out.mkv"], ["truncated or corrupt"]),
-    (["render", "W/novar.nc", "-o", "W/out.mkv"], ["novar.nc cannot be rendered",
-                                                   "bot_angle: missing"]),
+    (
+        ["render", "W/novar.nc", "-o", "W/out.mkv"],
+        ["novar.nc cannot be rendered", "bot_angle: missing"],
+    ),
     (["render", "W/sim", "-o", "W/out.mkv"], ["sweep over radius", "radius=INDEX"]),
-    (["render", "W/sim", "--point", "radius=0", "--px-per-cm", "inf", "-o", "W/out.mkv"],
-     ["px_per_cm = inf", "must be finite"]),
-    (["render", "W/sim", "--point", "radius=0", "--px-per-cm", "1e5", "-o", "W/out.mkv"],
-     ["frame width = ", "16384 px"]),
-    (["render", "W/sim", "--point", "radius=0", "--size", "0x0", "-o", "W/out.mkv"],
-     ["frame width = 0 px", "between 16 and 16384 px"]),
+    (
+        ["render", "W/sim", "--point", "radius=0", "--px-per-cm", "inf", "-o", "W/out.mkv"],
+        ["px_per_cm = inf", "must be finite"],
+    ),
+    (
+        ["render", "W/sim", "--point", "radius=0", "--px-per-cm", "1e5", "-o", "W/out.mkv"],
+        ["frame width = ", "16384 px"],
+    ),
+    (
+        ["render", "W/sim", "--point", "radius=0", "--size", "0x0", "-o", "W/out.mkv"],
+        ["frame width = 0 px", "between 16 and 16384 px"],
+    ),
     (["render", "W/sim", "--point", "radius=0", "-o", "W/out.txt"], [".mkv or .avi"]),
-    (["track", "W/v.mkv", "--arena-size", "0", "-o", "W/out.nc"],
-     ["arena_size = 0.0", "> 0 cm"]),
-    (["track", "W/v.mkv", "--px-per-cm", "10", "--fps", "0", "-o", "W/out.nc"],
-     ["fps = 0.0", "> 0 1/s"]),
-    (["track", "W/v.mkv", "--px-per-cm", "10", "--radius", "-1", "-o", "W/out.nc"],
-     ["radius = -1.0", "> 0 cm"]),
-    (["track", "W/v.mkv", "--px-per-cm", "10", "--origin", "inf,0", "-o", "W/out.nc"],
-     ["--origin = 'inf,0'", "finite"]),
-    (["track", "W/grey.mkv", "--px-per-cm", "10", "--quiet", "-o", "W/out.nc"],
-     ["no frame of", "was tracked", "5 frames"]),
+    (["track", "W/v.mkv", "--arena-size", "0", "-o", "W/out.nc"], ["arena_size = 0.0", "> 0 cm"]),
+    (
+        ["track", "W/v.mkv", "--px-per-cm", "10", "--fps", "0", "-o", "W/out.nc"],
+        ["fps = 0.0", "> 0 1/s"],
+    ),
+    (
+        ["track", "W/v.mkv", "--px-per-cm", "10", "--radius", "-1", "-o", "W/out.nc"],
+        ["radius = -1.0", "> 0 cm"],
+    ),
+    (
+        ["track", "W/v.mkv", "--px-per-cm", "10", "--origin", "inf,0", "-o", "W/out.nc"],
+        ["--origin = 'inf,0'", "finite"],
+    ),
+    (
+        ["track", "W/grey.mkv", "--px-per-cm", "10", "--quiet", "-o", "W/out.nc"],
+        ["no frame of", "was tracked", "5 frames"],
+    ),
     (["track", "W/missing.mkv", "--px-per-cm", "10", "-o", "W/out.nc"], ["no such video file"]),
-    (["figures", "W/an.nc", "--tracked", "W/tr.nc", "-o", "W/figs"],
-     ["tracked input is a tracking file, not an analysis"]),
+    (
+        ["figures", "W/an.nc", "--tracked", "W/tr.nc", "-o", "W/figs"],
+        ["tracked input is a tracking file, not an analysis"],
+    ),
     (["figures", "W/tr.nc", "-o", "W/figs"], ["analysis input is a tracking file"]),
-    (["figures", "W/an.nc", "--tracked", "W/nopdf.nc", "-o", "W/figs"],
-     ["tracked input lacks stop_pdf, go_pdf"]),
-    (["render", "W/sim", "--point", "radius=7", "-o", "W/out.mkv"],
-     ["radius index 7 is not allowed: 0 .. 1"]),
+    (
+        ["figures", "W/an.nc", "--tracked", "W/nopdf.nc", "-o", "W/figs"],
+        ["tracked input lacks stop_pdf, go_pdf"],
+    ),
+    (
+        ["render", "W/sim", "--point", "radius=7", "-o", "W/out.mkv"],
+        ["radius index 7 is not allowed: 0 .. 1"],
+    ),
 ]
 
 
 def _argv(row: list[str], world: Path) -> list[str]:
-    return [str(world / a[2:]) if a.startswith("W/") else str(world) if a == "W" else a
-            for a in row]
+    return [
+        str(world / a[2:]) if a.startswith("W/") else str(world) if a == "W" else a for a in row
+    ]
 
 
 @pytest.mark.parametrize(("row", "words"), BAD, ids=[" ".join(r[:4]) for r, _ in BAD])
@@ -188,12 +265,15 @@ def test_every_bad_input_is_one_line_exit_2_and_changes_nothing(world, row, word
     assert tree_hash(world) == before, "a refused command changed the disk"
 
 
-@pytest.mark.parametrize("row", [
-    ["simulate", "--seed", "-1", "-o", "W/new"],
-    ["track", "W/grey.mkv", "--px-per-cm", "10", "--quiet", "-o", "W/out.nc"],
-    ["analyze", "W/trunc.nc", "-o", "W/out.nc"],
-    ["simulate", "--radius", "4,6", *SMALL, "-o", "W/sim"],
-])
+@pytest.mark.parametrize(
+    "row",
+    [
+        ["simulate", "--seed", "-1", "-o", "W/new"],
+        ["track", "W/grey.mkv", "--px-per-cm", "10", "--quiet", "-o", "W/out.nc"],
+        ["analyze", "W/trunc.nc", "-o", "W/out.nc"],
+        ["simulate", "--radius", "4,6", *SMALL, "-o", "W/sim"],
+    ],
+)
 def test_the_installed_command_prints_no_traceback(world, row):
     before = tree_hash(world)
     run = subprocess.run([*PY, *_argv(row, world)], capture_output=True, text=True)
@@ -240,11 +320,24 @@ def test_a_file_of_another_spawn_key_is_not_reused(sweep, capsys):
     err = capsys.readouterr().err
     assert "point001_realization0000.nc was made with parameter radius = 4.0 there, 5.0" in err
     # Same point, other realization: everything equal but the spawn key.
-    assert main(["simulate", "--radius", "4", *SMALL, "--realizations", "2", "--overwrite",
-                 "-o", str(sweep)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--radius",
+                "4",
+                *SMALL,
+                "--realizations",
+                "2",
+                "--overwrite",
+                "-o",
+                str(sweep),
+            ]
+        )
+        == 0
+    )
     shutil.copy(sweep / "point000_realization0000.nc", sweep / "point000_realization0001.nc")
-    assert main(["simulate", "--radius", "4", *SMALL, "--realizations", "2",
-                 "-o", str(sweep)]) == 2
+    assert main(["simulate", "--radius", "4", *SMALL, "--realizations", "2", "-o", str(sweep)]) == 2
     assert "spawn key = 0,0 there, 0,1 in this request" in capsys.readouterr().err
 
 
@@ -254,11 +347,11 @@ def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
     monkeypatch.setattr(ensemble, "__version__", "99.0")
     assert _simulate(sweep) == 2
     assert f"softcell version = {softcell.__version__} there, 99.0 in this request" in (
-        capsys.readouterr().err)
+        capsys.readouterr().err
+    )
 
 
-def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path,
-                                                                         capsys):
+def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path, capsys):
     assert _simulate(sweep, "--overwrite", radius="4") == 0
     assert "--overwrite: removing 1 file(s)" in capsys.readouterr().err  # never silently
     assert sorted(p.name for p in sweep.iterdir()) == ["point000_realization0000.nc"]
@@ -274,8 +367,14 @@ def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path
     out.mkdir()
     checkpoint = checkpoint_path(out / "point000_realization0000.nc")
     request = json.dumps({"parameter radius": 9.0})
-    _save_checkpoint(checkpoint, request, 1, np.zeros((1, 9), complex), np.zeros((1, 3)),
-                     {"modes": np.zeros(9, complex)})
+    _save_checkpoint(
+        checkpoint,
+        request,
+        1,
+        np.zeros((1, 9), complex),
+        np.zeros((1, 3)),
+        {"modes": np.zeros(9, complex)},
+    )
     assert _simulate(out, radius="4") == 2
     assert "ckpt.npz was made with parameter radius = 9.0 there, 4.0" in capsys.readouterr().err
     checkpoint.write_bytes(b"PK\x03\x04 not a zip")
@@ -308,8 +407,11 @@ def small_disk(tmp_path):
     """A 3 MiB tmpfs (root and mount(8) needed; skipped otherwise)."""
     mount = tmp_path / "disk"
     mount.mkdir()
-    run = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", str(mount)],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", str(mount)],
+        capture_output=True,
+        text=True,
+    )
     if run.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here: {run.stderr.strip() or run.returncode}")
     try:
@@ -325,11 +427,12 @@ def _fill(disk: Path, leave: int) -> None:
 
 def test_read_only_folder_is_refused_before_computing(world, small_disk, capsys):
     subprocess.run(["mount", "-o", "remount,ro", str(small_disk)], check=True)
-    for row in (["simulate", "--radius", "4", *SMALL, "-o", str(small_disk / "sim")],
-                ["analyze", str(world / "sim"), "-o", str(small_disk / "a.nc")],
-                ["figures", str(world / "an.nc"), "-o", str(small_disk / "figs")],
-                ["render", str(world / "sim"), "--point", "radius=0", "-o",
-                 str(small_disk / "v.mkv")]):
+    for row in (
+        ["simulate", "--radius", "4", *SMALL, "-o", str(small_disk / "sim")],
+        ["analyze", str(world / "sim"), "-o", str(small_disk / "a.nc")],
+        ["figures", str(world / "an.nc"), "-o", str(small_disk / "figs")],
+        ["render", str(world / "sim"), "--point", "radius=0", "-o", str(small_disk / "v.mkv")],
+    ):
         assert main(row) == 2
         assert "read-only file system" in capsys.readouterr().err
     assert list(small_disk.iterdir()) == []
@@ -337,8 +440,23 @@ def test_read_only_folder_is_refused_before_computing(world, small_disk, capsys)
 
 def test_a_full_disk_is_named_and_leaves_nothing(world, small_disk, capsys, monkeypatch):
     # Refused up front: the run needs more than the disk has.
-    assert main(["simulate", "--radius", "4,5,6,7", "--realizations", "8", *SMALL,
-                 "--duration", "3", "-o", str(small_disk / "sim")]) == 2
+    assert (
+        main(
+            [
+                "simulate",
+                "--radius",
+                "4,5,6,7",
+                "--realizations",
+                "8",
+                *SMALL,
+                "--duration",
+                "3",
+                "-o",
+                str(small_disk / "sim"),
+            ]
+        )
+        == 2
+    )
     assert "no space left on device (the run needs about" in capsys.readouterr().err
     _fill(small_disk, 100_000)
     # NetCDF: the library loses the errno; the file system tells.
@@ -352,8 +470,24 @@ def test_a_full_disk_is_named_and_leaves_nothing(world, small_disk, capsys, monk
     import softcell.io.render as video
 
     monkeypatch.setattr(video, "DISK_CHECK_EVERY", 10**9)
-    assert main(["render", str(world / "sim"), "--point", "radius=0", "--px-per-cm", "40",
-                 "--noise", "3", "-o", str(small_disk / "v.mkv"), "--quiet"]) == 2
+    assert (
+        main(
+            [
+                "render",
+                str(world / "sim"),
+                "--point",
+                "radius=0",
+                "--px-per-cm",
+                "40",
+                "--noise",
+                "3",
+                "-o",
+                str(small_disk / "v.mkv"),
+                "--quiet",
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     assert "cannot write" in err and "no space left on device" in err and "frames" in err
     assert sorted(p.name for p in small_disk.iterdir()) == ["filler"]
@@ -368,8 +502,9 @@ def _interrupt(command: list[str], out: Path, wait_for: str) -> subprocess.Compl
     import signal
     import time
 
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)
+    process = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
     deadline = time.monotonic() + 300
     while not list(out.glob(wait_for)) and process.poll() is None:
         assert time.monotonic() < deadline, "the run never got going"
@@ -381,8 +516,23 @@ def _interrupt(command: list[str], out: Path, wait_for: str) -> subprocess.Compl
     return subprocess.CompletedProcess(command, process.returncode, stdout, stderr)
 
 
-LONG = ["--radius", "4", "--duration", "12", "--dt", "1e-5", "--cutoff", "4", "--nodes", "64",
-        "--stored-nodes", "16", "--integrator", "explicit_euler", "--quiet"]
+LONG = [
+    "--radius",
+    "4",
+    "--duration",
+    "12",
+    "--dt",
+    "1e-5",
+    "--cutoff",
+    "4",
+    "--nodes",
+    "64",
+    "--stored-nodes",
+    "16",
+    "--integrator",
+    "explicit_euler",
+    "--quiet",
+]
 
 
 def test_ctrl_c_says_where_it_stopped_and_the_rerun_resumes_to_the_same_bytes(tmp_path):
@@ -405,8 +555,17 @@ def test_ctrl_c_says_where_it_stopped_and_the_rerun_resumes_to_the_same_bytes(tm
 def test_ctrl_c_on_two_workers_is_one_line_and_resumes(tmp_path):
     out = tmp_path / "run"
     flags = [*LONG[:1], "4,5", *LONG[2:]]
-    command = [*PY, "simulate", *flags, "--workers", "2", "--checkpoint-every", "0.2",
-               "-o", str(out)]
+    command = [
+        *PY,
+        "simulate",
+        *flags,
+        "--workers",
+        "2",
+        "--checkpoint-every",
+        "0.2",
+        "-o",
+        str(out),
+    ]
     run = _interrupt(command, out, ".*.ckpt.npz")
     assert run.returncode == 130, run.stderr
     lines = run.stderr.strip().splitlines()
@@ -425,8 +584,7 @@ def test_ctrl_c_on_two_workers_is_one_line_and_resumes(tmp_path):
 # -- plugins ----------------------------------------------------------------------------------
 
 
-def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_path,
-                                                                             monkeypatch):
+def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_path, monkeypatch):
     from test_registry import fake_entry_points
 
     from softcell.core.plugin.registry import PluginWarning, Registry
@@ -441,8 +599,7 @@ def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_
     assert registry.skipped == [] and "fake_hysteresis" in registry.names("stopgo_detector")
 
 
-def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkeypatch,
-                                                                  capsys):
+def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkeypatch, capsys):
     from test_registry import fake_entry_points
 
     from softcell.core.plugin import registry as reg
@@ -454,7 +611,8 @@ def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkey
     captured = capsys.readouterr()
     assert "skipped (1)" in captured.out
     assert "broken: ImportError: this fake plugin needs a module that is not installed" in (
-        captured.out)
+        captured.out
+    )
     assert "distribution softcell-fake 1.2" in captured.out
     warned = [line for line in captured.err.splitlines() if "was skipped" in line]
     assert len(warned) == 1 and warned[0].startswith("softcell: warning: ")
@@ -462,33 +620,69 @@ def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkey
 
 # -- the property: a second request reuses exactly what it asked for, or stops -------------
 
-FIRST = {"radius": [4.0, 5.0], "duration": 0.3, "dt": 1e-5, "cutoff": 4, "nodes": 64,
-         "stored_nodes": 16}
+FIRST = {
+    "radius": [4.0, 5.0],
+    "duration": 0.3,
+    "dt": 1e-5,
+    "cutoff": 4,
+    "nodes": 64,
+    "stored_nodes": 16,
+}
 FIRST_COMPONENTS = {"integrator": "explicit_euler"}
 
-requests = st.fixed_dictionaries({
-    "radius": st.sampled_from([[4.0, 5.0], [4.0], [5.0, 4.0], [4.0, 6.0], [4.0, 5.0, 6.0]]),
-    "duration": st.sampled_from([0.3, 0.2, 0.5]),
-    "tension": st.sampled_from([None, 0.02, 0.03]),
-    "seed": st.sampled_from([0, 1, 2**64 - 1]),
-    "realizations": st.integers(1, 3),
-    "integrator": st.sampled_from(["explicit_euler", "rodas4"]),
-    "energy_terms": st.sampled_from([["bending", "tension", "contact"],
-                                     ["bending", "tension"]]),
-    "membrane": st.booleans(),
-})
+requests = st.fixed_dictionaries(
+    {
+        "radius": st.sampled_from([[4.0, 5.0], [4.0], [5.0, 4.0], [4.0, 6.0], [4.0, 5.0, 6.0]]),
+        "duration": st.sampled_from([0.3, 0.2, 0.5]),
+        "tension": st.sampled_from([None, 0.02, 0.03]),
+        "seed": st.sampled_from([0, 1, 2**64 - 1]),
+        "realizations": st.integers(1, 3),
+        "integrator": st.sampled_from(["explicit_euler", "rodas4"]),
+        "energy_terms": st.sampled_from(
+            [["bending", "tension", "contact"], ["bending", "tension"]]
+        ),
+        "membrane": st.booleans(),
+    }
+)
 
 
 @given(second=requests)
-@example(second={"radius": [4.0, 5.0], "duration": 0.3, "tension": None, "seed": 0,
-                 "realizations": 2, "integrator": "explicit_euler",
-                 "energy_terms": ["bending", "tension", "contact"], "membrane": True})
-@example(second={"radius": [4.0, 5.0], "duration": 0.3, "tension": 0.02, "seed": 0,
-                 "realizations": 1, "integrator": "explicit_euler",
-                 "energy_terms": ["bending", "tension", "contact"], "membrane": True})
-@example(second={"radius": [4.0, 5.0, 6.0], "duration": 0.3, "tension": None, "seed": 0,
-                 "realizations": 1, "integrator": "explicit_euler",
-                 "energy_terms": ["bending", "tension", "contact"], "membrane": True})
+@example(
+    second={
+        "radius": [4.0, 5.0],
+        "duration": 0.3,
+        "tension": None,
+        "seed": 0,
+        "realizations": 2,
+        "integrator": "explicit_euler",
+        "energy_terms": ["bending", "tension", "contact"],
+        "membrane": True,
+    }
+)
+@example(
+    second={
+        "radius": [4.0, 5.0],
+        "duration": 0.3,
+        "tension": 0.02,
+        "seed": 0,
+        "realizations": 1,
+        "integrator": "explicit_euler",
+        "energy_terms": ["bending", "tension", "contact"],
+        "membrane": True,
+    }
+)
+@example(
+    second={
+        "radius": [4.0, 5.0, 6.0],
+        "duration": 0.3,
+        "tension": None,
+        "seed": 0,
+        "realizations": 1,
+        "integrator": "explicit_euler",
+        "energy_terms": ["bending", "tension", "contact"],
+        "membrane": True,
+    }
+)
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
     from softcell.core.plugin.registry import get_registry
     from softcell.core.runconfig import RunConfig
@@ -499,10 +693,16 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
     values = {**FIRST, "radius": second["radius"], "duration": second["duration"]}
     if second["tension"] is not None:
         values["tension"] = second["tension"]
-    config = RunConfig(parameters=values).updated(components={
-        "integrator": second["integrator"], "energy_terms": second["energy_terms"]})
-    tasks = plan(config, out, realizations=second["realizations"], seed=second["seed"],
-                 membrane=second["membrane"])
+    config = RunConfig(parameters=values).updated(
+        components={"integrator": second["integrator"], "energy_terms": second["energy_terms"]}
+    )
+    tasks = plan(
+        config,
+        out,
+        realizations=second["realizations"],
+        seed=second["seed"],
+        membrane=second["membrane"],
+    )
     specs = list(get_registry().parameter_specs().values())
     try:
         resume = resume_plan(tasks, out)
@@ -517,11 +717,18 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
     assert resume.reused == len(tasks) - len(todo)
     # Independently: the first run made realization 0 of radius 4 (point 0) and 5 (point 1);
     # a task may reuse its file only if every other setting is the first run's too.
-    same_settings = (second["duration"] == 0.3 and second["tension"] in (None, 0.02)
-                     and second["seed"] == 0 and second["integrator"] == "explicit_euler"
-                     and second["membrane"]
-                     and second["energy_terms"] == ["bending", "tension", "contact"])
+    same_settings = (
+        second["duration"] == 0.3
+        and second["tension"] in (None, 0.02)
+        and second["seed"] == 0
+        and second["integrator"] == "explicit_euler"
+        and second["membrane"]
+        and second["energy_terms"] == ["bending", "tension", "contact"]
+    )
     made = {0: 4.0, 1: 5.0}
-    expected = sum(1 for t in tasks if same_settings and t.realization == 0
-                   and made.get(t.point) == second["radius"][t.point])
+    expected = sum(
+        1
+        for t in tasks
+        if same_settings and t.realization == 0 and made.get(t.point) == second["radius"][t.point]
+    )
     assert resume.reused == expected

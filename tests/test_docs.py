@@ -56,8 +56,11 @@ def test_docstrings_cite_sections_that_exist():
     text = (root / "docs" / "model.md").read_text()
     sections = set(re.findall(r"^## (\d+)\. ", text, flags=re.M))
     cited = set()
-    for path in [*(root / "softcell").rglob("*.py"), *(root / "docs").glob("*.md"),
-                 root / "README.md"]:
+    for path in [
+        *(root / "softcell").rglob("*.py"),
+        *(root / "docs").glob("*.md"),
+        root / "README.md",
+    ]:
         for first, last in re.findall(r"model\.md §(\d+)(?:-(\d+))?", path.read_text()):
             cited |= {str(n) for n in range(int(first), int(last or first) + 1)}
     assert cited and cited <= sections, cited - sections
@@ -70,8 +73,11 @@ def documented_commands() -> list[tuple[str, str]]:
     import shlex
 
     root = Path(__file__).parents[1]
-    pages = [root / "README.md", *sorted((root / "docs").glob("*.md")),
-             root / "examples" / "plugin" / "README.md"]
+    pages = [
+        root / "README.md",
+        *sorted((root / "docs").glob("*.md")),
+        root / "examples" / "plugin" / "README.md",
+    ]
     found = []
     for page in pages:
         for block in re.findall(r"```(?:console|bash)\n(.*?)```", page.read_text(), flags=re.S):
@@ -111,4 +117,5 @@ def test_documented_commands_parse(page, line):
     assert callable(args.func)
     for source in getattr(args, "inputs", None) or []:  # the data-safety rule of analyze
         assert Path(source) not in Path(args.output).parents, (
-            f"{page}: `softcell {line}` writes inside its input {source}")
+            f"{page}: `softcell {line}` writes inside its input {source}"
+        )

@@ -51,11 +51,18 @@ def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
     from distributed import LocalCluster
 
     # A scheduler reached over loopback, as a remote one would be.
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
         assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
-        three = simulate(config, tmp_path / "three", realizations=2, seed=5, progress=False,
-                         scheduler=cluster.scheduler_address)
+        three = simulate(
+            config,
+            tmp_path / "three",
+            realizations=2,
+            seed=5,
+            progress=False,
+            scheduler=cluster.scheduler_address,
+        )
     assert [p.read_bytes() for p in one] == [p.read_bytes() for p in three]
     other = simulate(config, tmp_path / "other", realizations=2, seed=6, progress=False)
     assert one[0].read_bytes() != other[0].read_bytes()
@@ -74,6 +81,7 @@ def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
 
     class Refusing:
         """A client that records what it is given and then fails the wait."""
+
         submitted: list = []
 
         def submit(self, fn, task, *args, priority=0, **kwargs):
@@ -105,14 +113,21 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
             calls["n"] += 1
             if calls["n"] == 3:
                 raise KeyboardInterrupt  # as if killed after the third sample
+
         kwargs["progress"] = progress
         return original(*args, **kwargs)
 
     monkeypatch.setattr(ensemble, "run_realization", interrupted)
     monkeypatch.setattr(realization, "SAMPLES_PER_CALL", 1)
     with pytest.raises(KeyboardInterrupt):
-        simulate(config, tmp_path / "resumed", realizations=1, seed=2, progress=False,
-                 checkpoint_every=0.0)
+        simulate(
+            config,
+            tmp_path / "resumed",
+            realizations=1,
+            seed=2,
+            progress=False,
+            checkpoint_every=0.0,
+        )
     out = tmp_path / "resumed"
     assert not list(out.glob("*.nc"))  # nothing under a final name
     assert list(out.glob(".*.ckpt.npz"))
@@ -123,9 +138,9 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
 
 
 def test_blow_up_names_time_realization_and_quantity(tmp_path):
-    config = RunConfig(parameters={"radius": 4.0, "duration": 0.02, "dt": 1e-5,
-                                   "membrane_friction": 1e-6}).updated(
-        components={"integrator": "explicit_euler"})
+    config = RunConfig(
+        parameters={"radius": 4.0, "duration": 0.02, "dt": 1e-5, "membrane_friction": 1e-6}
+    ).updated(components={"integrator": "explicit_euler"})
     with pytest.raises((SimulationError, ParameterError)) as info:
         simulate(config, tmp_path, realizations=1, progress=False)
     assert "dt" in str(info.value)  # the stability check refuses it up front
@@ -136,8 +151,11 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     model.membrane_mobility *= 1e4
     from softcell.core.realization import realization_rng, run_realization
 
-    with pytest.raises(SimulationError, match=r"realization 7: (non-finite modes|membrane length)"
-                                              r".* at t = [0-9.e-]+ s"):
+    with pytest.raises(
+        SimulationError,
+        match=r"realization 7: (non-finite modes|membrane length)"
+        r".* at t = [0-9.e-]+ s",
+    ):
         run_realization(model, stepper, realization_rng(0, 0, 0), label=7)
     assert not list(tmp_path.glob("*.nc"))
 
@@ -164,13 +182,15 @@ def test_unstable_dt_is_refused_with_the_bound():
         build_integrator("explicit_euler", params).build(model)
 
 
-ANCHOR = ParameterSpec("anchor_stiffness", 0.01, "N cm-2", "a test spring to the origin",
-                       minimum=0.0)
+ANCHOR = ParameterSpec(
+    "anchor_stiffness", 0.01, "N cm-2", "a test spring to the origin", minimum=0.0
+)
 
 
 @njit
-def anchor_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                    p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def anchor_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     kappa = coefficients[0]
     for n in range(x.size):
         p0x[n] += kappa * x[n]
@@ -199,15 +219,17 @@ def test_third_party_energy_term_works_like_a_builtin(tmp_path):
         fhat, _ = force_modes(model, modes, np.zeros(3))
         h = np.zeros_like(modes)
         h[model.cutoff] = 1e-6
-        d_re = (total_energy(model, modes + h, np.zeros(3))
-                - total_energy(model, modes - h, np.zeros(3))) / 2e-6
+        d_re = (
+            total_energy(model, modes + h, np.zeros(3))
+            - total_energy(model, modes - h, np.zeros(3))
+        ) / 2e-6
         assert d_re == pytest.approx(-2 * np.pi * fhat[model.cutoff].real, rel=1e-6)
         # The spring pulls the center back: f_hat_0 = -kappa g_0.
         assert fhat[model.cutoff] == pytest.approx(-0.01 * (0.3 + 0.1j), rel=1e-9)
-        config = RunConfig(parameters={"radius": 5.0, "duration": 0.02, **COARSE,
-                                       "anchor_stiffness": 0.02},
-                           components={**RunConfig().components,
-                                       "energy_terms": ["bending", "tension", "anchor"]})
+        config = RunConfig(
+            parameters={"radius": 5.0, "duration": 0.02, **COARSE, "anchor_stiffness": 0.02},
+            components={**RunConfig().components, "energy_terms": ["bending", "tension", "anchor"]},
+        )
         path = simulate(config, tmp_path, realizations=1, progress=False)[0]
         ds = softcell.read_dataset(path)
         assert '"anchor_stiffness": 0.02' in ds.attrs["softcell_parameters"]
@@ -215,22 +237,74 @@ def test_third_party_energy_term_works_like_a_builtin(tmp_path):
 
 
 def test_cli_simulate_writes_one_file_per_point_and_realization(tmp_path, capsys):
-    assert main(["simulate", "--radius", "4,5", "--duration", "0.02", "--dt", "1e-5",
-                 "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--realizations", "2",
-                 "--quiet", "-o", str(tmp_path)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--radius",
+                "4,5",
+                "--duration",
+                "0.02",
+                "--dt",
+                "1e-5",
+                "--cutoff",
+                "4",
+                "--nodes",
+                "64",
+                "--stored-nodes",
+                "16",
+                "--realizations",
+                "2",
+                "--quiet",
+                "-o",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
     assert len(list(tmp_path.glob("*.nc"))) == 4
     assert main(["simulate", "--radius", "2", "-o", str(tmp_path), "--quiet"]) == 2
     assert "radius = 2.0 cm" in capsys.readouterr().err
-    assert main(["simulate", "--free-bot", "--duration", "0.02", "--dt", "1e-5", "--quiet",
-                 "-o", str(tmp_path / "free")]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--free-bot",
+                "--duration",
+                "0.02",
+                "--dt",
+                "1e-5",
+                "--quiet",
+                "-o",
+                str(tmp_path / "free"),
+            ]
+        )
+        == 0
+    )
     ds = softcell.open_dataset(tmp_path / "free" / "point000_realization0000.nc")
     assert np.isnan(ds["membrane_x"]).all() and not np.isnan(ds["bot_x"]).any()
 
 
 def test_kill_9_then_the_same_command_resumes_to_the_same_bytes(tmp_path):
-    flags = ["--integrator", "explicit_euler", "--radius", "4", "--duration", "8", "--dt", "1e-5",
-             "--cutoff", "4",
-             "--nodes", "64", "--stored-nodes", "16", "--seed", "3", "--quiet"]
+    flags = [
+        "--integrator",
+        "explicit_euler",
+        "--radius",
+        "4",
+        "--duration",
+        "8",
+        "--dt",
+        "1e-5",
+        "--cutoff",
+        "4",
+        "--nodes",
+        "64",
+        "--stored-nodes",
+        "16",
+        "--seed",
+        "3",
+        "--quiet",
+    ]
     command = [sys.executable, "-m", "softcell", "simulate", *flags]
     subprocess.run([*command, "-o", str(tmp_path / "whole")], check=True)
     out = tmp_path / "killed"

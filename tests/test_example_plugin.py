@@ -24,16 +24,36 @@ COARSE = ["--cutoff", "4", "--nodes", "64", "--stored-nodes", "16"]
 def site(tmp_path_factory):
     """softcell-example installed with pip into a fresh directory (not into this venv)."""
     target = tmp_path_factory.mktemp("site")
-    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
-                    "--target", str(target), str(EXAMPLE)], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--target",
+            str(target),
+            str(EXAMPLE),
+        ],
+        check=True,
+    )
     return target
 
 
 def softcell_cli(site, *args, cwd):
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(site), *filter(None, [os.environ.get("PYTHONPATH")])])}
-    return subprocess.run([sys.executable, "-m", "softcell", *map(str, args)], cwd=cwd,
-                          env=env, capture_output=True, text=True, check=True).stdout
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(site), *filter(None, [os.environ.get("PYTHONPATH")])]),
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "softcell", *map(str, args)],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +64,9 @@ def example(site):
     try:
         with registered() as registry:
             origin = registry.entries("energy_term")
-            assert any(e.component.name == "pressure" and "softcell-example" in e.origin
-                       for e in origin)
+            assert any(
+                e.component.name == "pressure" and "softcell-example" in e.origin for e in origin
+            )
         yield registered
     finally:
         sys.path.remove(str(site))
@@ -55,22 +76,54 @@ def test_installed_distribution_registers_one_component_of_each_kind(site, tmp_p
     listing = softcell_cli(site, "plugins", cwd=tmp_path)
     for name in ("pressure", "run_and_reverse", "explicit_auto", "hysteresis"):
         block = listing.split(f"    {name}:")[1].split("\n    ")[0:2]
-        assert block[1].strip() == ("origin: distribution softcell-example 1.0.0 "
-                                    "(entry point example = softcell_example.plugin)")
+        assert block[1].strip() == (
+            "origin: distribution softcell-example 1.0.0 "
+            "(entry point example = softcell_example.plugin)"
+        )
 
 
 def test_installed_components_run_end_to_end_from_the_command_line(site, tmp_path):
-    softcell_cli(site, "simulate", "--energy-terms", "bending,tension,contact,pressure",
-                 "--pressure", "2e-4", "--protocol", "run_and_reverse", "--integrator",
-                 "explicit_auto", "--radius", "5", "--duration", "0.3", *COARSE, "--quiet",
-                 "-o", "run", cwd=tmp_path)
-    softcell_cli(site, "analyze", "run", "-o", "analysis.nc", "--discard", "0.05",
-                 "--detector", "hysteresis", "--quiet", cwd=tmp_path)
+    softcell_cli(
+        site,
+        "simulate",
+        "--energy-terms",
+        "bending,tension,contact,pressure",
+        "--pressure",
+        "2e-4",
+        "--protocol",
+        "run_and_reverse",
+        "--integrator",
+        "explicit_auto",
+        "--radius",
+        "5",
+        "--duration",
+        "0.3",
+        *COARSE,
+        "--quiet",
+        "-o",
+        "run",
+        cwd=tmp_path,
+    )
+    softcell_cli(
+        site,
+        "analyze",
+        "run",
+        "-o",
+        "analysis.nc",
+        "--discard",
+        "0.05",
+        "--detector",
+        "hysteresis",
+        "--quiet",
+        cwd=tmp_path,
+    )
     run = xr.open_dataset(next((tmp_path / "run").glob("*.nc")))
     components = json.loads(run.attrs["softcell_components"])
     assert components["energy_terms"] == ["bending", "tension", "contact", "pressure"]
     assert (components["driving_protocol"], components["integrator"]) == (
-        "run_and_reverse", "explicit_auto")
+        "run_and_reverse",
+        "explicit_auto",
+    )
     assert json.loads(run.attrs["softcell_parameters"])["pressure"] == 2e-4
     analysis = xr.open_dataset(tmp_path / "analysis.nc")
     assert analysis.attrs["softcell_detector"] == "hysteresis"
@@ -81,8 +134,9 @@ def test_pressure_pushes_a_circle_out_with_force_p_r(example):
     # mode k = 1 alone; and E = -P * pi R^2.
     radius, pressure = 6.0, 3e-4
     with example():
-        params = Parameters({"radius": radius, "pressure": pressure},
-                            get_registry().parameter_specs().values())
+        params = Parameters(
+            {"radius": radius, "pressure": pressure}, get_registry().parameter_specs().values()
+        )
         model = build_model(params, ["pressure"], "run_and_reverse")
     modes = circle_modes(radius, model.cutoff, 0.4 - 0.2j)
     fhat, dpose = force_modes(model, modes, np.zeros(3))
@@ -93,8 +147,12 @@ def test_pressure_pushes_a_circle_out_with_force_p_r(example):
     z = 0.4 - 0.2j + radius * np.exp(1j * xi)
     zp = 1j * radius * np.exp(1j * xi)
     term = model.terms[0]
-    energy = 2 * np.pi / model.nodes * term.density(z.real, z.imag, zp.real, zp.imag, 0, 0,
-                                                     np.zeros(3)).sum()
+    energy = (
+        2
+        * np.pi
+        / model.nodes
+        * term.density(z.real, z.imag, zp.real, zp.imag, 0, 0, np.zeros(3)).sum()
+    )
     assert energy == pytest.approx(-pressure * np.pi * radius**2, rel=1e-12)
 
 
@@ -104,16 +162,15 @@ def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
 
     with example():
         config = RunConfig(parameters={"radius": 5.0, "duration": 8.0}).updated(
-            components={"driving_protocol": "run_and_reverse",
-                        "integrator": "explicit_auto"})
+            components={"driving_protocol": "run_and_reverse", "integrator": "explicit_auto"}
+        )
         path = simulate(config, tmp_path, membrane=False, progress=False)[0]
     ds = xr.open_dataset(path)
     t = ds.time.values
     x, y, angle = (ds[n].values[0] for n in ("bot_x", "bot_y", "bot_angle"))
     phase = ds.bot_phase.values[0]
     run = (phase[:-1] == 1) & (phase[1:] == 1)
-    along = ((np.diff(x) * np.cos(angle[:-1]) + np.diff(y) * np.sin(angle[:-1]))
-             / np.diff(t))[run]
+    along = ((np.diff(x) * np.cos(angle[:-1]) + np.diff(y) * np.sin(angle[:-1])) / np.diff(t))[run]
     v = 0.04275 / 0.00285  # F0 / gamma_T = 15 cm/s
     assert np.all(np.isclose(np.abs(along), v, rtol=1e-6))
     assert (along > 0).any() and (along < 0).any()
@@ -126,13 +183,22 @@ def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path)
     runs = {}
     with example():
         for integrator in ("explicit_auto", "explicit_euler"):
-            config = RunConfig(parameters={"radius": 4.0, "duration": 0.3, "cutoff": 4,
-                                           "nodes": 64, "stored_nodes": 16}).updated(
-                components={"integrator": integrator})
+            config = RunConfig(
+                parameters={
+                    "radius": 4.0,
+                    "duration": 0.3,
+                    "cutoff": 4,
+                    "nodes": 64,
+                    "stored_nodes": 16,
+                }
+            ).updated(components={"integrator": integrator})
             runs[integrator] = xr.open_dataset(
-                simulate(config, tmp_path / integrator, seed=3, progress=False)[0])
-        params = Parameters({"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16},
-                            get_registry().parameter_specs().values())
+                simulate(config, tmp_path / integrator, seed=3, progress=False)[0]
+            )
+        params = Parameters(
+            {"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16},
+            get_registry().parameter_specs().values(),
+        )
         model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
         auto = get_registry().get("integrator", "explicit_auto")(params)
         from softcell.core.engine import explicit_decay_rate
@@ -141,8 +207,9 @@ def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path)
     assert dt > 1e-6 and dt * explicit_decay_rate(model) <= 2 * 0.5
     assert round(0.01 / dt) * dt == pytest.approx(0.01, rel=1e-12)
     for name in ("bot_x", "bot_y", "cell_x", "cell_y"):
-        np.testing.assert_allclose(runs["explicit_auto"][name], runs["explicit_euler"][name],
-                                   atol=2e-3)
+        np.testing.assert_allclose(
+            runs["explicit_auto"][name], runs["explicit_euler"][name], atol=2e-3
+        )
 
 
 def test_hysteresis_holds_its_label_between_the_thresholds(example):

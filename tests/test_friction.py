@@ -35,8 +35,11 @@ GAMMA = float(MODEL_PARAMETERS["membrane_friction"].default)
 
 def regularised_speed(f, threshold, width, gamma=GAMMA):
     f = np.abs(np.asarray(f, dtype=float))
-    return width / gamma * (np.logaddexp(0.0, (f - threshold) / width)
-                            - np.logaddexp(0.0, (-f - threshold) / width))
+    return (
+        width
+        / gamma
+        * (np.logaddexp(0.0, (f - threshold) / width) - np.logaddexp(0.0, (-f - threshold) / width))
+    )
 
 
 def sharp_speed(f, threshold, gamma=GAMMA):
@@ -45,9 +48,11 @@ def sharp_speed(f, threshold, gamma=GAMMA):
 
 # -- a uniform push, as a third-party energy term -------------------------------------------
 
+
 @njit(cache=True)
-def push_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                  p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def push_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     # e = -(l0 / 2 pi) f . gamma: the force density per unit length is f everywhere
     scale = context[0] / (2.0 * math.pi)
     for n in range(x.size):
@@ -63,8 +68,10 @@ def push_hessian(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hwp, 
 class Push(EnergyTerm):
     name = "uniform_push"
     description = "a uniform force density (push_x, push_y) on the membrane"
-    parameters = (ParameterSpec("push_x", 0.0, "N cm-1", "push along x"),
-                  ParameterSpec("push_y", 0.0, "N cm-1", "push along y"))
+    parameters = (
+        ParameterSpec("push_x", 0.0, "N cm-1", "push along x"),
+        ParameterSpec("push_y", 0.0, "N cm-1", "push along y"),
+    )
     derivative_order = 0
 
     def partials_kernel(self):
@@ -111,9 +118,10 @@ def _schedule(duration):
 
 
 def _params(registry, **values):
-    return Parameters({"radius": 4.0, "duration": 1.0, "drive_force": 1e-12,
-                       "drive_torque": 1e-12, **values},
-                      registry.parameter_specs().values())
+    return Parameters(
+        {"radius": 4.0, "duration": 1.0, "drive_force": 1e-12, "drive_torque": 1e-12, **values},
+        registry.parameter_specs().values(),
+    )
 
 
 def _run(registry, terms, law, integrator, times, modes=None, **values):
@@ -127,6 +135,7 @@ def _run(registry, terms, law, integrator, times, modes=None, **values):
 
 
 # -- the law itself -------------------------------------------------------------------------
+
 
 def test_the_kernel_is_the_closed_form_and_converges_to_the_sharp_law():
     f = np.linspace(-5e-4, 5e-4, 2001)
@@ -145,8 +154,7 @@ def test_the_kernel_is_the_closed_form_and_converges_to_the_sharp_law():
 
 
 @settings(max_examples=50, deadline=None)
-@given(st.floats(-1e-3, 1e-3), st.floats(-1e-3, 1e-3), st.floats(0.0, 3e-4),
-       st.floats(1e-7, 1e-4))
+@given(st.floats(-1e-3, 1e-3), st.floats(-1e-3, 1e-3), st.floats(0.0, 3e-4), st.floats(1e-7, 1e-4))
 def test_the_derivative_matches_differences_and_the_law_dissipates(fx, fy, threshold, width):
     c = np.array([GAMMA, threshold, width])
     f = np.array([[fx, fy]]).T.copy()
@@ -171,16 +179,25 @@ def test_the_derivative_matches_differences_and_the_law_dissipates(fx, fy, thres
 
 # -- a uniformly pushed membrane ------------------------------------------------------------
 
+
 @pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
 @pytest.mark.parametrize("ratio", [0.5, 0.9, 1.5, 3.0])
 def test_a_uniformly_pushed_membrane_moves_at_the_laws_speed(plugin, integrator, ratio):
     threshold, width = 1e-4, 1e-6
     push = ratio * threshold
     times = [0.1, 0.2]
-    model, (modes, _) = _run(plugin, ["uniform_push"], "coulomb", integrator, times,
-                             push_x=0.6 * push, push_y=0.8 * push,
-                             membrane_static_friction=threshold, static_friction_width=width,
-                             dt=1e-4)
+    model, (modes, _) = _run(
+        plugin,
+        ["uniform_push"],
+        "coulomb",
+        integrator,
+        times,
+        push_x=0.6 * push,
+        push_y=0.8 * push,
+        membrane_static_friction=threshold,
+        static_friction_width=width,
+        dt=1e-4,
+    )
     lc = model.cutoff
     velocity = (modes[1, lc] - modes[0, lc]) / 0.1  # the centre's mode, cm/s
     expected = regularised_speed(push, threshold, width)
@@ -189,8 +206,7 @@ def test_a_uniformly_pushed_membrane_moves_at_the_laws_speed(plugin, integrator,
         assert np.angle(velocity) == pytest.approx(math.atan2(0.8, 0.6), abs=1e-9)
         assert expected == pytest.approx((push - threshold) / GAMMA, rel=2e-2)
     else:  # below the threshold: still, to (eps / gamma) exp(-(f_s - |f|) / eps)
-        assert abs(velocity) <= width / GAMMA * math.exp(-(threshold - push) / width) * (
-            1 + 1e-9)
+        assert abs(velocity) <= width / GAMMA * math.exp(-(threshold - push) / width) * (1 + 1e-9)
     # a rigid translation: the shape does not change
     assert np.abs(np.delete(modes[1] - circle_modes(4.0, lc), lc)).max() < 1e-12
 
@@ -203,9 +219,16 @@ def test_the_sharp_limit_of_the_push_speed(plugin):
     for push, widths in ((threshold, (1e-5, 1e-6, 1e-7)), (2 * threshold, (1e-5,))):
         speeds = []
         for width in widths:
-            model, (modes, _) = _run(plugin, ["uniform_push"], "coulomb", "rodas4",
-                                     [0.1, 0.2], push_x=push, membrane_static_friction=threshold,
-                                     static_friction_width=width)
+            model, (modes, _) = _run(
+                plugin,
+                ["uniform_push"],
+                "coulomb",
+                "rodas4",
+                [0.1, 0.2],
+                push_x=push,
+                membrane_static_friction=threshold,
+                static_friction_width=width,
+            )
             speeds.append(abs(modes[1, model.cutoff] - modes[0, model.cutoff]) / 0.1)
         sharp = (push - threshold) / GAMMA
         for width, speed in zip(widths, speeds, strict=True):
@@ -217,19 +240,24 @@ def test_the_sharp_limit_of_the_push_speed(plugin):
 
 # -- f_s -> 0 is the viscous law ------------------------------------------------------------
 
-@pytest.mark.parametrize("integrator, times", [("rodas4", [0.5, 1.0]),
-                                               ("explicit_euler", [0.002, 0.004])])
+
+@pytest.mark.parametrize(
+    "integrator, times", [("rodas4", [0.5, 1.0]), ("explicit_euler", [0.002, 0.004])]
+)
 def test_zero_threshold_is_the_viscous_law_to_rounding(integrator, times):
     registry = get_registry()
     runs = []
     for law, extra in (("viscous", {}), ("coulomb", {"membrane_static_friction": 0.0})):
-        params = Parameters({"radius": 4.0, "duration": 1.0, **extra},
-                            registry.parameter_specs().values())
-        model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble",
-                            friction_law=law)
+        params = Parameters(
+            {"radius": 4.0, "duration": 1.0, **extra}, registry.parameter_specs().values()
+        )
+        model = build_model(
+            params, ["bending", "tension", "contact"], "run_and_tumble", friction_law=law
+        )
         stepper = build_integrator(integrator, params).build(model)
-        schedule = Schedule(np.array([0.0, 0.3]), np.array([1, 0], dtype=np.int8),
-                            np.array([1.0, 1.0]))
+        schedule = Schedule(
+            np.array([0.0, 0.3]), np.array([1, 0], dtype=np.int8), np.array([1.0, 1.0])
+        )
         modes = circle_modes(4.0, model.cutoff)
         # the bot's tip 0.005 cm into the membrane: in contact from the start
         state = stepper.start(modes, np.array([0.995, 0.0, 0.0]), schedule)
@@ -240,6 +268,7 @@ def test_zero_threshold_is_the_viscous_law_to_rounding(integrator, times):
 
 
 # -- a released ellipse ---------------------------------------------------------------------
+
 
 def _ellipse(cutoff, radius=4.0, delta=0.3):
     modes = circle_modes(radius, cutoff)
@@ -263,12 +292,20 @@ def test_a_released_ellipse_relaxes_with_viscous_friction_and_stays_with_coulomb
     start = _ellipse(cutoff)
     f_max = _largest_restoring_force(plugin, start)
     times = [1.0, 2.0]
-    _, (viscous, _) = _run(plugin, ["bending", "tension"], "viscous", "rodas4", times,
-                           modes=start.copy())
+    _, (viscous, _) = _run(
+        plugin, ["bending", "tension"], "viscous", "rodas4", times, modes=start.copy()
+    )
     threshold, width = 2.0 * f_max, 0.01 * f_max
-    _, (coulomb, _) = _run(plugin, ["bending", "tension"], "coulomb", "rodas4", times,
-                           modes=start.copy(), membrane_static_friction=threshold,
-                           static_friction_width=width)
+    _, (coulomb, _) = _run(
+        plugin,
+        ["bending", "tension"],
+        "coulomb",
+        "rodas4",
+        times,
+        modes=start.copy(),
+        membrane_static_friction=threshold,
+        static_friction_width=width,
+    )
     assert abs(viscous[-1, cutoff - 1]) < 0.5 * abs(start[cutoff - 1])  # relaxes
     # coulomb: every point moves at most g(f_max) (the law below its threshold) for 2 s
     bound = 2.0 * regularised_speed(f_max, threshold, width)
@@ -280,14 +317,18 @@ def test_a_released_ellipse_relaxes_with_viscous_friction_and_stays_with_coulomb
 @pytest.mark.parametrize("law", ["coulomb", "coulomb_differences"])
 def test_rodas4_jacobian_with_static_friction_matches_differences(plugin, law):
     params = _params(plugin, membrane_static_friction=1e-4, static_friction_width=3e-5)
-    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble",
-                        friction_law=law)
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", friction_law=law
+    )
     stepper = build_integrator("rodas4", params).build(model)
     rng = np.random.default_rng(3)
     modes = _ellipse(model.cutoff, delta=0.05)
     lc = model.cutoff
-    modes += (rng.normal(size=modes.size) + 1j * rng.normal(size=modes.size)) * 0.01 / (
-        1 + np.abs(np.arange(-lc, lc + 1))) ** 2
+    modes += (
+        (rng.normal(size=modes.size) + 1j * rng.normal(size=modes.size))
+        * 0.01
+        / (1 + np.abs(np.arange(-lc, lc + 1))) ** 2
+    )
     u = pack(modes, np.array([4.3 - 3.0 - 0.005, 0.1, 0.2]))
 
     jac, diff = rodas4_jacobians(model, stepper, u)
@@ -296,18 +337,27 @@ def test_rodas4_jacobian_with_static_friction_matches_differences(plugin, law):
 
 # -- energy decreases in a free relaxation under both laws ----------------------------------
 
+
 @settings(max_examples=12, deadline=None)
-@given(st.lists(st.complex_numbers(max_magnitude=0.15), min_size=4, max_size=4),
-       st.sampled_from(["viscous", "coulomb"]), st.floats(0.0, 3e-4), st.floats(1e-6, 1e-4))
+@given(
+    st.lists(st.complex_numbers(max_magnitude=0.15), min_size=4, max_size=4),
+    st.sampled_from(["viscous", "coulomb"]),
+    st.floats(0.0, 3e-4),
+    st.floats(1e-6, 1e-4),
+)
 def test_energy_decreases_in_a_free_relaxation(plugin, shape, law, threshold, width):
     cutoff = int(_params(plugin).cutoff)
     modes = circle_modes(4.0, cutoff)
     for k, amplitude in zip((-1, 2, -2, 3), shape, strict=True):
         modes[cutoff + k] += amplitude
     times = np.linspace(0.05, 1.0, 20)
-    extra = ({"membrane_static_friction": threshold, "static_friction_width": width}
-             if law == "coulomb" else {})
-    model, (record, _) = _run(plugin, ["bending", "tension"], law, "rodas4", times,
-                              modes=modes, **extra)
+    extra = (
+        {"membrane_static_friction": threshold, "static_friction_width": width}
+        if law == "coulomb"
+        else {}
+    )
+    model, (record, _) = _run(
+        plugin, ["bending", "tension"], law, "rodas4", times, modes=modes, **extra
+    )
     energy = [total_energy(model, m, np.zeros(3)) for m in [modes, *record]]
     assert np.all(np.diff(energy) <= 1e-12 * abs(energy[0]))

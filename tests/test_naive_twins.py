@@ -35,7 +35,8 @@ def test_energy_and_forces_against_the_naive_formulas(radius, seed):
     model, modes, pose = perturbed_membrane(radius, seed, (radius - 3.0, 0.0, 0.0))
     p = model.params
     assert total_energy(model, modes, pose) == pytest.approx(
-        naive.energy(modes, model.nodes, p, pose), rel=1e-10)
+        naive.energy(modes, model.nodes, p, pose), rel=1e-10
+    )
     fhat, _ = force_modes(model, modes, pose)
     twin = naive.force_modes(modes, model.nodes, p, pose)
     scale = np.abs(twin).max()
@@ -52,13 +53,16 @@ def test_signed_distance_against_a_brute_force_search(px, py, a, ratio):
 
 
 @settings(max_examples=50)
-@given(arrays(np.float64, st.tuples(st.integers(2, 40), st.integers(1, 3)),
-              elements=st.floats(-100, 100)), st.data())
+@given(
+    arrays(
+        np.float64, st.tuples(st.integers(2, 40), st.integers(1, 3)), elements=st.floats(-100, 100)
+    ),
+    st.data(),
+)
 def test_msd_against_the_double_loop(positions, data):
     missing = data.draw(st.lists(st.integers(0, positions.shape[0] - 1), max_size=5))
     positions[missing] = np.nan
-    assert np.allclose(msd(positions), naive.msd(positions), rtol=1e-9, atol=1e-9,
-                       equal_nan=True)
+    assert np.allclose(msd(positions), naive.msd(positions), rtol=1e-9, atol=1e-9, equal_nan=True)
 
 
 @settings(max_examples=50)
@@ -79,5 +83,6 @@ def test_run_lengths_against_the_definition(samples):
     labels = np.array([s[0] for s in samples], dtype=np.int8)
     segment = np.cumsum([s[1] == 2 for s in samples]).astype(np.int64)  # new segments
     start, length, value = phases(labels, segment)
-    assert list(zip(start.tolist(), length.tolist(), value.tolist(), strict=True)) == \
-        naive.phases(labels.tolist(), segment.tolist())
+    assert list(zip(start.tolist(), length.tolist(), value.tolist(), strict=True)) == naive.phases(
+        labels.tolist(), segment.tolist()
+    )

@@ -14,8 +14,9 @@ import softcell
 @pytest.fixture(scope="module")
 def sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("plain") / "sweep"
-    config = softcell.RunConfig(parameters={"radius": [4.0, 6.0], "duration": 2.0,
-                                            "bending_stiffness": [0.3, 0.57]})
+    config = softcell.RunConfig(
+        parameters={"radius": [4.0, 6.0], "duration": 2.0, "bending_stiffness": [0.3, 0.57]}
+    )
     softcell.simulate(config, out, realizations=2, seed=3, progress=False)
     return out
 
@@ -33,17 +34,23 @@ def test_a_file_carries_its_swept_parameters_and_every_parameter(sweep):
 def test_plain_xarray_rebuilds_the_sweep_as_softcell_does(sweep):
     files = sorted(sweep.glob("*.nc"))
     stored = {f: xr.open_dataset(f) for f in files}
-    key = {f: (float(d["radius"]), float(d["bending_stiffness"]), int(d["realization"][0]))
-           for f, d in stored.items()}
-    grid = [[[f for f in files if key[f] == (r, k, i)][0] for i in (0, 1)]
-            for r in (4.0, 6.0) for k in (0.3, 0.57)]
+    key = {
+        f: (float(d["radius"]), float(d["bending_stiffness"]), int(d["realization"][0]))
+        for f, d in stored.items()
+    }
+    grid = [
+        [[f for f in files if key[f] == (r, k, i)][0] for i in (0, 1)]
+        for r in (4.0, 6.0)
+        for k in (0.3, 0.57)
+    ]
     # Nested: one list per (radius, k) point, realizations inside; the radius and k of each
     # point are its files' scalar coordinates.
-    points = [xr.open_mfdataset(row, combine="nested", concat_dim="realization")
-              for row in grid]
-    plain = xr.combine_nested([points[0:2], points[2:4]],
-                              concat_dim=["radius", "bending_stiffness"],
-                              combine_attrs="drop_conflicts")
+    points = [xr.open_mfdataset(row, combine="nested", concat_dim="realization") for row in grid]
+    plain = xr.combine_nested(
+        [points[0:2], points[2:4]],
+        concat_dim=["radius", "bending_stiffness"],
+        combine_attrs="drop_conflicts",
+    )
     ours = softcell.open_dataset(sweep)
     assert plain["radius"].values.tolist() == [4.0, 6.0]
     assert plain["bending_stiffness"].values.tolist() == [0.3, 0.57]

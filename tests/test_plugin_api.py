@@ -25,8 +25,9 @@ def softcell_imports(source: str, where: str) -> list[str]:
             names = [(node.lineno, node.module or "")]
         else:
             continue
-        found += [f"{where}:{line} {name}" for line, name in names
-                  if name.split(".")[0] == "softcell"]
+        found += [
+            f"{where}:{line} {name}" for line, name in names if name.split(".")[0] == "softcell"
+        ]
     return found
 
 
@@ -35,14 +36,17 @@ def python_blocks(markdown: Path) -> list[str]:
 
 
 SOURCES = [(str(p.relative_to(ROOT)), p.read_text()) for p in sorted(EXAMPLE.rglob("*.py"))]
-SOURCES += [(f"docs/plugins.md block {i}", block)
-            for i, block in enumerate(python_blocks(ROOT / "docs" / "plugins.md"))]
+SOURCES += [
+    (f"docs/plugins.md block {i}", block)
+    for i, block in enumerate(python_blocks(ROOT / "docs" / "plugins.md"))
+]
 
 
 @pytest.mark.parametrize("where, source", SOURCES, ids=[w for w, _ in SOURCES])
 def test_plugin_code_imports_only_softcell_plugin(where, source):
-    wrong = [line for line in softcell_imports(source, where)
-             if not line.endswith(" softcell.plugin")]
+    wrong = [
+        line for line in softcell_imports(source, where) if not line.endswith(" softcell.plugin")
+    ]
     assert not wrong, "\n".join(wrong)
 
 
@@ -54,8 +58,18 @@ def test_the_checker_sees_a_private_import():
 def test_the_api_holds_every_contract_and_what_it_promises():
     names = set(softcell.plugin.__all__)
     assert {c.__name__ for c in CONTRACTS.values()} <= names
-    assert {"hookimpl", "Stepper", "Schedule", "Model", "ParameterSpec", "ParameterError",
-            "PHASE_RUN", "PHASE_TUMBLE", "RunAndTumble", "run_and_tumble_drive"} <= names
+    assert {
+        "hookimpl",
+        "Stepper",
+        "Schedule",
+        "Model",
+        "ParameterSpec",
+        "ParameterError",
+        "PHASE_RUN",
+        "PHASE_TUMBLE",
+        "RunAndTumble",
+        "run_and_tumble_drive",
+    } <= names
     for name in names:
         assert hasattr(softcell.plugin, name), name
         value = getattr(softcell.plugin, name)
@@ -78,6 +92,7 @@ def test_the_docs_example_protocol_runs():
     assert lengths.min() >= 0.002 and lengths.max() <= 0.005
     assert set(schedule.phase[:2]) == {softcell.plugin.PHASE_RUN, softcell.plugin.PHASE_TUMBLE}
     plugin = types.SimpleNamespace(
-        softcell_driving_protocols=namespace["softcell_driving_protocols"])
+        softcell_driving_protocols=namespace["softcell_driving_protocols"]
+    )
     with softcell.plugin.registered(plugin) as registry:
         assert registry.get("driving_protocol", "flicker") is namespace["Flicker"]

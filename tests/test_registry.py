@@ -21,14 +21,22 @@ def fake_entry_points(tmp_path, monkeypatch, **plugins):
     lines = "\n".join(f"{name} = fakeplugins.{module}" for name, module in plugins.items())
     (info / "entry_points.txt").write_text(f"[softcell]\n{lines}\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    return [ep for ep in importlib.metadata.entry_points(group="softcell")
-            if ep.dist.name == "softcell-fake"]
+    return [
+        ep
+        for ep in importlib.metadata.entry_points(group="softcell")
+        if ep.dist.name == "softcell-fake"
+    ]
 
 
 def test_builtins_register_through_the_hooks():
     registry = Registry(entry_points=[])
-    assert set(KINDS.values()) == {"energy_term", "driving_protocol", "friction_law",
-                                   "integrator", "stopgo_detector"}
+    assert set(KINDS.values()) == {
+        "energy_term",
+        "driving_protocol",
+        "friction_law",
+        "integrator",
+        "stopgo_detector",
+    }
     assert registry.names("friction_law") == ["coulomb", "viscous"]
     assert "arena" in registry.names("energy_term")
     entry = registry.entries("stopgo_detector")[0]
@@ -47,17 +55,23 @@ def test_good_entry_point_is_loaded_with_its_distribution(tmp_path, monkeypatch)
 
 def test_broken_entry_point_warns_with_its_distribution_and_is_skipped(tmp_path, monkeypatch):
     eps = fake_entry_points(tmp_path, monkeypatch, good="good", broken="broken")
-    with pytest.warns(PluginWarning, match=r"'broken' from distribution softcell-fake 1\.2.*"
-                                           r"ImportError: this fake plugin needs"):
+    with pytest.warns(
+        PluginWarning,
+        match=r"'broken' from distribution softcell-fake 1\.2.*"
+        r"ImportError: this fake plugin needs",
+    ):
         registry = Registry(entry_points=eps)
     assert registry.names("stopgo_detector") == ["fake_hysteresis", "threshold"]
     assert [name for name, _ in registry.skipped] == ["broken"]
 
 
-@pytest.mark.parametrize("module, message", [
-    ("misspelt", "unknown hook 'softcell_energy_term'"),
-    ("malformed", "description must be one non-empty line.*abstract methods not implemented"),
-])
+@pytest.mark.parametrize(
+    "module, message",
+    [
+        ("misspelt", "unknown hook 'softcell_energy_term'"),
+        ("malformed", "description must be one non-empty line.*abstract methods not implemented"),
+    ],
+)
 def test_malformed_plugins_are_skipped_loudly(tmp_path, monkeypatch, module, message):
     eps = fake_entry_points(tmp_path, monkeypatch, bad=module)
     with pytest.warns(PluginWarning, match=message):
@@ -98,8 +112,7 @@ def test_plugin_registered_for_one_test():
         def label(self, speed, interval):
             raise NotImplementedError
 
-    plugin = types.SimpleNamespace(
-        softcell_stopgo_detectors=softcell.hookimpl(lambda: [Always]))
+    plugin = types.SimpleNamespace(softcell_stopgo_detectors=softcell.hookimpl(lambda: [Always]))
     with registered(plugin):
         assert get_registry().get("stopgo_detector", "always_go") is Always
     assert "always_go" not in get_registry().names("stopgo_detector")

@@ -13,8 +13,15 @@ from softcell.errors import SoftcellError
 from softcell.workflows.findings import findings
 from softcell.workflows.reproduce import Design, VideoDesign, reproduce
 
-TINY = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0, discard=5.0,
-              free_bot_realizations=2, video=VideoDesign(radius=12.0, span=5.0))
+TINY = Design(
+    "tiny",
+    radii=(4.0, 12.0),
+    realizations=2,
+    duration=30.0,
+    discard=5.0,
+    free_bot_realizations=2,
+    video=VideoDesign(radius=12.0, span=5.0),
+)
 FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
 
 
@@ -35,9 +42,15 @@ def test_every_figure_is_written_as_png_and_pdf(results):
 def test_report_states_what_ran_and_links_every_figure(results):
     out, outcome = results
     md = (out / "report.md").read_text()
-    for text in (f"softcell {softcell.__version__}", "integrator = rodas4", "Seed 4",
-                 "SeedSequence(4, spawn_key=(p, r))", "Findings: the paper beside this run",
-                 "The experimental pipeline", "| bending_stiffness | 0.57 | N cm2 |"):
+    for text in (
+        f"softcell {softcell.__version__}",
+        "integrator = rodas4",
+        "Seed 4",
+        "SeedSequence(4, spawn_key=(p, r))",
+        "Findings: the paper beside this run",
+        "The experimental pipeline",
+        "| bending_stiffness | 0.57 | N cm2 |",
+    ):
         assert text in md
     for name in FIGURES:
         assert f"(figures/{name}.png)" in md and f"(figures/{name}.pdf)" in md
@@ -54,13 +67,23 @@ def test_report_states_what_ran_and_links_every_figure(results):
     parser.feed((out / "report.html").read_text())
     assert len(parser.links) == 2 * len(FIGURES)
     assert all((out / link).is_file() for link in parser.links)
-    assert set(outcome.steps) == {"simulations", "free_bot", "analysis", "video", "figures",
-                                  "report"}
+    assert set(outcome.steps) == {
+        "simulations",
+        "free_bot",
+        "analysis",
+        "video",
+        "figures",
+        "report",
+    }
     summary = json.loads((out / "findings.json").read_text())
     assert summary["seed"] == 4 and summary["design"] == "tiny"
     for row in summary["findings"]:
         assert row["topic"] in md and row["verdict"] in (
-            "agrees", "partly", "differs", "not measured")
+            "agrees",
+            "partly",
+            "differs",
+            "not measured",
+        )
 
 
 def test_outputs_carry_cf_attributes_and_their_provenance(results):
@@ -107,7 +130,11 @@ def test_figures_command_draws_what_its_inputs_allow(results, tmp_path, capsys):
     assert "note: fig2 not drawn: needs the simulations" in printed
     assert "note: figS1 not drawn: needs the free bot's analysis" in printed
     assert sorted(p.name for p in tmp_path.glob("*.png")) == [
-        "fig3.png", "fig4.png", "figS2.png", "figS3.png"]
+        "fig3.png",
+        "fig4.png",
+        "figS2.png",
+        "figS3.png",
+    ]
     free = softcell.read_dataset(out / "free_bot_analysis.nc")
     assert main(["figures", str(out / "free_bot_analysis.nc"), "-o", str(tmp_path)]) == 2
     assert "radius sweep" in capsys.readouterr().err
@@ -123,7 +150,8 @@ def test_verdicts_follow_their_stated_rules(results):
     analysis = softcell.read_dataset(out / "analysis.nc")
     radii = np.arange(4.0, 14.0)
     ten = xr.concat([analysis.isel(radius=0)] * radii.size, dim="radius").assign_coords(
-        radius=radii)
+        radius=radii
+    )
 
     def with_cell(ds, name, values):
         ds = ds.copy()
@@ -147,8 +175,9 @@ def test_verdicts_follow_their_stated_rules(results):
     regimes["regime"] = ("radius", np.array([1, 1, 1, 1, 2, 2, 2, 2, 1, 2], dtype=np.int8))
     assert _verdict(findings(regimes), "regime per R") == "differs"
 
-    peaked = with_cell(regimes, "mean_go_duration",
-                       [0.3, 0.5, 0.9, 0.8, 0.6, 0.6, 0.61, 0.6, 0.6, 0.6])
+    peaked = with_cell(
+        regimes, "mean_go_duration", [0.3, 0.5, 0.9, 0.8, 0.6, 0.6, 0.61, 0.6, 0.6, 0.6]
+    )
     peaked["regime"] = ("radius", np.array([0, 0, 1, 1, 2, 2, 2, 2, 2, 2], dtype=np.int8))
     assert _verdict(findings(peaked), "<tau_g> against R") == "agrees"
     flat_then_low = with_cell(peaked, "mean_go_duration", np.linspace(0.9, 0.3, 10))
@@ -163,6 +192,10 @@ def test_verdicts_follow_their_stated_rules(results):
 
 def test_bad_requests_are_refused_with_the_value(tmp_path):
     with pytest.raises(SoftcellError, match="video's radius 8 cm is not among"):
-        reproduce(tmp_path, Design("x", radii=(4.0, 12.0), video=VideoDesign(radius=8.0)),
-                  progress=False, log=None)
+        reproduce(
+            tmp_path,
+            Design("x", radii=(4.0, 12.0), video=VideoDesign(radius=8.0)),
+            progress=False,
+            log=None,
+        )
     assert main(["reproduce", "--quick", "--workers", "0", "-o", str(tmp_path)]) == 2

@@ -30,13 +30,17 @@ REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"
 
 def _state(radius, contact, seed=1):
     """A deformed membrane with the bot's tip 0.005 cm inside it (contact) or at rest."""
-    params = Parameters({"radius": radius, "duration": 1.0},
-                        get_registry().parameter_specs().values())
+    params = Parameters(
+        {"radius": radius, "duration": 1.0}, get_registry().parameter_specs().values()
+    )
     rng = np.random.default_rng(seed)
     lc = int(params.cutoff)
     modes = circle_modes(equilibrium_radius(params), lc)
-    modes += ((rng.normal(size=modes.size) + 1j * rng.normal(size=modes.size)) * 0.02
-              / (1 + np.abs(np.arange(-lc, lc + 1))) ** 2)
+    modes += (
+        (rng.normal(size=modes.size) + 1j * rng.normal(size=modes.size))
+        * 0.02
+        / (1 + np.abs(np.arange(-lc, lc + 1))) ** 2
+    )
     pose = np.array([radius - 3.0 - 0.005, 0.1, 0.2] if contact else [0.3, 0.1, 0.0])
     return params, modes, pose
 
@@ -66,8 +70,19 @@ def test_analytic_second_derivatives_match_the_fallback(name):
     fallback = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
     steps = np.array([1e-7 * 4.0] * 8 + [1e-7])
     fd_hessian(term.partials_kernel())(
-        w.copy(), pose, model.context, coefficients, steps, np.zeros(n), np.zeros((6, n)),
-        np.zeros((6, n)), np.zeros(3), np.zeros(3), np.zeros(3), *fallback)
+        w.copy(),
+        pose,
+        model.context,
+        coefficients,
+        steps,
+        np.zeros(n),
+        np.zeros((6, n)),
+        np.zeros((6, n)),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        *fallback,
+    )
     assert np.abs(analytic[0]).max() > 0
     for a, f in zip(analytic, fallback, strict=True):
         assert np.abs(a - f).max() <= 1e-6 * np.abs(f).max() + 1e-300
@@ -96,10 +111,10 @@ def test_right_hand_side_matches_the_engine_forces():
     m = modes.size
     scale = np.abs(model.membrane_mobility * fhat).max()
     assert np.abs(out[:m] - model.membrane_mobility * fhat.real).max() <= 1e-11 * scale
-    assert np.abs(out[m:2 * m] - model.membrane_mobility * fhat.imag).max() <= 1e-11 * scale
+    assert np.abs(out[m : 2 * m] - model.membrane_mobility * fhat.imag).max() <= 1e-11 * scale
     drive = float(params.drive_force) * np.array([np.cos(pose[2]), np.sin(pose[2]), 0.0])
     expected = model.bot_mobility * (drive - 2 * np.pi / model.nodes * dpose)
-    np.testing.assert_allclose(out[2 * m:], expected, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(out[2 * m :], expected, rtol=1e-10, atol=1e-12)
 
 
 class DifferentialBending(EnergyTerm):
@@ -135,15 +150,14 @@ def test_a_term_without_second_derivatives_uses_the_documented_fallback():
 
 
 def test_same_bytes_whatever_the_split_of_the_samples():
-    params = Parameters({"radius": 4.0, "duration": 0.3},
-                        get_registry().parameter_specs().values())
+    params = Parameters({"radius": 4.0, "duration": 0.3}, get_registry().parameter_specs().values())
     model, stepper = _stepper(params)
     modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
     times = np.arange(1, 31) * 0.01
     state = stepper.start(modes, pose, schedule)
     whole = stepper.sample(state, schedule, times)
     state = stepper.start(modes, pose, schedule)
-    pieces = [stepper.sample(state, schedule, times[i:i + 7]) for i in range(0, 30, 7)]
+    pieces = [stepper.sample(state, schedule, times[i : i + 7]) for i in range(0, 30, 7)]
     for k in range(2):
         assert np.concatenate([p[k] for p in pieces]).tobytes() == whole[k].tobytes()
     assert stepper.statistics(state)["steps"] > 0
@@ -152,8 +166,9 @@ def test_same_bytes_whatever_the_split_of_the_samples():
 def test_bad_smooth_grid_is_refused():
     from softcell.errors import ParameterError
 
-    params = Parameters({"radius": 4.0, "smooth_nodes": 32},
-                        get_registry().parameter_specs().values())
+    params = Parameters(
+        {"radius": 4.0, "smooth_nodes": 32}, get_registry().parameter_specs().values()
+    )
     with pytest.raises(ParameterError, match="smooth_nodes = 32 .* must be >= 4 cutoff = 64"):
         build_integrator("rodas4", params)
 
@@ -171,8 +186,9 @@ def test_against_the_explicit_reference(reference, radius):
     from softcell.testing.compare import coarse_statistics, parameters, path_difference, run
 
     key = f"r{radius:g}"
-    explicit = Record(reference[f"{key}_times"], reference[f"{key}_modes"],
-                      reference[f"{key}_pose"], None)
+    explicit = Record(
+        reference[f"{key}_times"], reference[f"{key}_modes"], reference[f"{key}_pose"], None
+    )
     errors = {}
     for tol in (1e-5, None, 1e-7):
         extra = {} if tol is None else {"atol": tol, "rtol": tol}

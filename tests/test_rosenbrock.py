@@ -30,8 +30,7 @@ def step(f, args, u, jac, h):
     """One step; returns (new state, error norm at atol = rtol = 1, dense rows)."""
     s = RODAS4.stages
     mat, pivots = np.zeros((1, 1)), np.zeros(1, np.int64)
-    k, y, force, ynew, f0 = (np.zeros((s, 1)), np.zeros(1), np.zeros(1), np.zeros(1),
-                             np.zeros(1))
+    k, y, force, ynew, f0 = (np.zeros((s, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1))
     f(u, f0, args)
     assert factor_iteration_matrix(np.array([[jac]]), h, RODAS4.gamma, mat, pivots)
     stages(f, args, u, f0, h, RODAS4.a, RODAS4.c, mat, pivots, k, y, force)

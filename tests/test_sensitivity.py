@@ -23,8 +23,9 @@ from softcell.workflows.sensitivity import (
     variants_named,
 )
 
-SMALL = replace(BASE, radii=(4.0, 12.0), realizations=2, duration=20.0,
-                free_bot_realizations=2, discard=5.0)
+SMALL = replace(
+    BASE, radii=(4.0, 12.0), realizations=2, duration=20.0, free_bot_realizations=2, discard=5.0
+)
 
 
 def test_crossing_interpolates_between_radii():
@@ -36,8 +37,12 @@ def test_crossing_interpolates_between_radii():
 
 
 def _result(verdicts, **facts):
-    base = {"free_bot_run_speed": 15.0, "length_deviation": 2e-4, "regime_at_4": "coupled",
-            "regime_at_12": "decoupled"}
+    base = {
+        "free_bot_run_speed": 15.0,
+        "length_deviation": 2e-4,
+        "regime_at_4": "coupled",
+        "regime_at_12": "decoupled",
+    }
     return {"verdicts": verdicts, "facts": {**base, **facts}}
 
 
@@ -47,13 +52,15 @@ def test_flips_and_candidates_follow_their_rules():
         "default": _result({"a": "agrees", "b": "differs", "c": "differs"}),
         "k_0.18": _result({"a": "agrees", "b": "agrees", "c": "differs"}),  # strictly more
         "pivot": _result({"a": "differs", "b": "agrees", "c": "agrees"}),  # loses a
-        "coulomb": _result({"a": "agrees", "b": "agrees", "c": "agrees"},
-                           regime_at_12="intermediate"),  # breaks a stated fact
+        "coulomb": _result(
+            {"a": "agrees", "b": "agrees", "c": "agrees"}, regime_at_12="intermediate"
+        ),  # breaks a stated fact
     }
     assert flips(results, variants) == {
-        "a": {"pivot": "differs"}, "b": {"k_0.18": "agrees", "pivot": "agrees",
-                                         "coulomb": "agrees"},
-        "c": {"pivot": "agrees", "coulomb": "agrees"}}
+        "a": {"pivot": "differs"},
+        "b": {"k_0.18": "agrees", "pivot": "agrees", "coulomb": "agrees"},
+        "c": {"pivot": "agrees", "coulomb": "agrees"},
+    }
     assert candidates(results, variants) == ["k_0.18"]
 
 
@@ -62,10 +69,14 @@ def test_the_variants_move_one_unknown_each():
     assert names[0] == "default" and len(set(names)) == len(names)
     unknowns = [v.unknown for v in VARIANTS[1:]]
     assert sorted(set(unknowns)) == ["bot", "cutoff", "friction", "k", "lambda", "rotation"]
-    owns = {"bot": {"bot_semi_major", "bot_semi_minor"}, "k": {"bending_stiffness"},
-            "cutoff": {"cutoff"}, "lambda": {"contact_length"},
-            "rotation": {"driving_protocol"},
-            "friction": {"friction_law", "membrane_static_friction", "static_friction_width"}}
+    owns = {
+        "bot": {"bot_semi_major", "bot_semi_minor"},
+        "k": {"bending_stiffness"},
+        "cutoff": {"cutoff"},
+        "lambda": {"contact_length"},
+        "rotation": {"driving_protocol"},
+        "friction": {"friction_law", "membrane_static_friction", "static_friction_width"},
+    }
     for v in VARIANTS[1:]:  # what a variant sets belongs to its unknown alone
         assert set(v.parameters) | set(v.components) <= owns[v.unknown]
     with pytest.raises(SoftcellError, match="unknown variant"):
@@ -76,16 +87,19 @@ def test_small_study_runs_resumes_and_summarizes(tmp_path):
     out = tmp_path / "study"
     variants = variants_named(["k_0.18"])
     lines: list[str] = []
-    report = sensitivity(out, variants=variants, base=SMALL, workers=2, progress=False,
-                         log=lines.append)
+    report = sensitivity(
+        out, variants=variants, base=SMALL, workers=2, progress=False, log=lines.append
+    )
     summary = json.loads((out / "sensitivity.json").read_text())
     assert summary["seed"] == 0 and list(summary["variants"]) == ["default", "k_0.18"]
     default = summary["variants"]["default"]
     # The free bot's runs go at F0 / gamma_T = 15 cm/s exactly (docs/model.md §2).
     assert default["facts"]["free_bot_run_speed"] == pytest.approx(15.0, rel=1e-6)
     # Common random numbers: every variant's realization r drew the same schedule.
-    phases = [softcell.open_dataset(out / v / "simulations")["bot_phase"].isel(time=slice(0, 50))
-              for v in ("default", "k_0.18")]
+    phases = [
+        softcell.open_dataset(out / v / "simulations")["bot_phase"].isel(time=slice(0, 50))
+        for v in ("default", "k_0.18")
+    ]
     assert np.array_equal(phases[0].values, phases[1].values)
     # A softer membrane deforms more: the IPR excess grows at every radius.
     circle = 2 * math.sqrt(math.pi)
@@ -98,18 +112,22 @@ def test_small_study_runs_resumes_and_summarizes(tmp_path):
     gap = np.hypot(sims["bot_x"] - sims["cell_x"], sims["bot_y"] - sims["cell_y"]).values
     each = gap[..., keep].mean(axis=-1) / np.array([4.0, 12.0])[:, None]
     assert default["gc_distance_ratio"]["sem"] == pytest.approx(
-        list(each.std(axis=1, ddof=1) / np.sqrt(2)), rel=1e-9)
+        list(each.std(axis=1, ddof=1) / np.sqrt(2)), rel=1e-9
+    )
     text = report.read_text()
-    for heading in ("The findings per variant", "Which variants flip a verdict",
-                    "The paper's stated facts per variant", "Regime boundaries"):
+    for heading in (
+        "The findings per variant",
+        "Which variants flip a verdict",
+        "The paper's stated facts per variant",
+        "Regime boundaries",
+    ):
         assert heading in text
     assert (out / "figures" / "sensitivity.png").stat().st_size > 10_000
     assert (out / "figures" / "verdicts.png").stat().st_size > 5_000
     # A rerun keeps the finished variants and redoes only the summary.
     lines.clear()
     before = (out / "k_0.18" / "analysis.nc").stat().st_mtime_ns
-    sensitivity(out, variants=variants, base=SMALL, workers=2, progress=False,
-                log=lines.append)
+    sensitivity(out, variants=variants, base=SMALL, workers=2, progress=False, log=lines.append)
     assert sum("finished, kept" in line for line in lines) == 2
     assert (out / "k_0.18" / "analysis.nc").stat().st_mtime_ns == before
 

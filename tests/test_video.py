@@ -31,14 +31,25 @@ def errors(tracked, truth):
     cell = np.hypot(t.cell_x.values - truth.cell_x.values, t.cell_y.values - truth.cell_y.values)
     bot = np.hypot(t.bot_x.values - truth.bot_x.values, t.bot_y.values - truth.bot_y.values)
     turn = (t.bot_angle.values - truth.bot_angle.values + np.pi) % (2 * np.pi) - np.pi
-    return (np.sqrt(np.mean(cell**2)), np.sqrt(np.mean(bot**2)),
-            np.degrees(np.sqrt(np.mean(turn**2))))
+    return (
+        np.sqrt(np.mean(cell**2)),
+        np.sqrt(np.mean(bot**2)),
+        np.degrees(np.sqrt(np.mean(turn**2))),
+    )
 
 
 @pytest.mark.parametrize("noise, blur, illumination", [(0.0, 0.0, 0.0), (3.0, 1.0, 0.2)])
 def test_round_trip_positions_at_10_px_per_cm(simulated, tmp_path, noise, blur, illumination):
-    info = render(simulated, tmp_path / "cell.mkv", px_per_cm=10, fps=30, noise=noise,
-                  blur=blur, illumination=illumination, seed=3)
+    info = render(
+        simulated,
+        tmp_path / "cell.mkv",
+        px_per_cm=10,
+        fps=30,
+        noise=noise,
+        blur=blur,
+        illumination=illumination,
+        seed=3,
+    )
     assert info.interpolated  # 1/30 s frames fall between 0.01 s samples, and it says so
     tracked = track(tmp_path / "cell.mkv", px_per_cm=10, origin=(info.frame.x0, info.frame.y0))
     softcell.validate(tracked)
@@ -64,8 +75,12 @@ def test_without_a_head_mark_continuity_and_motion_fix_the_direction(simulated, 
 def test_a_failed_frame_is_nan_flagged_and_counted(simulated, tmp_path):
     info = render(simulated, tmp_path / "cell.mkv", px_per_cm=10, fps=30, end=0.5)
     reader = cv2.VideoCapture(str(tmp_path / "cell.mkv"))
-    writer = cv2.VideoWriter(str(tmp_path / "gap.mkv"), cv2.VideoWriter_fourcc(*"FFV1"), 30,
-                             (info.frame.width, info.frame.height))
+    writer = cv2.VideoWriter(
+        str(tmp_path / "gap.mkv"),
+        cv2.VideoWriter_fourcc(*"FFV1"),
+        30,
+        (info.frame.width, info.frame.height),
+    )
     index = 0
     while True:
         ok, image = reader.read()
@@ -90,8 +105,19 @@ def test_bad_videos_give_one_clear_error(tmp_path, capsys):
     (tmp_path / "corrupt.mkv").write_bytes(np.random.default_rng(0).bytes(5000))
     with pytest.raises(SoftcellError, match="corrupt"):
         track(tmp_path / "corrupt.mkv", px_per_cm=10)
-    assert main(["track", str(tmp_path / "corrupt.mkv"), "--px-per-cm", "10",
-                 "-o", str(tmp_path / "t.nc")]) == 2
+    assert (
+        main(
+            [
+                "track",
+                str(tmp_path / "corrupt.mkv"),
+                "--px-per-cm",
+                "10",
+                "-o",
+                str(tmp_path / "t.nc"),
+            ]
+        )
+        == 2
+    )
     assert "corrupt" in capsys.readouterr().err
 
 
@@ -108,12 +134,24 @@ def test_bad_render_requests_are_named(simulated, tmp_path):
 def test_cli_render_then_track(simulated, tmp_path, capsys):
     sim = tmp_path / "sim.nc"
     softcell.write_dataset(simulated, sim)
-    assert main(["render", str(sim), "-o", str(tmp_path / "v.mkv"), "--end", "0.3",
-                 "--quiet"]) == 0
+    assert main(["render", str(sim), "-o", str(tmp_path / "v.mkv"), "--end", "0.3", "--quiet"]) == 0
     out = capsys.readouterr().out
     corner = out.split("--origin=")[1].split(")")[0]
-    assert main(["track", str(tmp_path / "v.mkv"), "--px-per-cm", "10", f"--origin={corner}",
-                 "--quiet", "-o", str(tmp_path / "t.nc")]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(tmp_path / "v.mkv"),
+                "--px-per-cm",
+                "10",
+                f"--origin={corner}",
+                "--quiet",
+                "-o",
+                str(tmp_path / "t.nc"),
+            ]
+        )
+        == 0
+    )
     tracked = softcell.open_dataset(tmp_path / "t.nc")
     assert tracked.sizes["time"] == 10
     assert abs(float(tracked.cell_x[0, 0]) - float(simulated.cell_x[0, 0])) < 0.01

@@ -22,16 +22,24 @@ COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}
 def sim(tmp_path_factory):
     config = RunConfig(parameters={"radius": 12.0, "duration": 100.0, **COARSE})
     out = tmp_path_factory.mktemp("sim")
-    return softcell.read_dataset(simulate(config, out, realizations=1, seed=4,
-                                          progress=False)[0])
+    return softcell.read_dataset(simulate(config, out, realizations=1, seed=4, progress=False)[0])
 
 
 @pytest.mark.parametrize("noise, blur", [(0.0, 0.0), (3.0, 1.0)])
 def test_round_trip_statistics(sim, tmp_path, noise, blur):
-    info = render(sim, tmp_path / "cell.mkv", px_per_cm=10, fps=30, noise=noise, blur=blur,
-                  illumination=0.2 if noise else 0.0, seed=1)
-    tracked = track(tmp_path / "cell.mkv", px_per_cm=10, origin=(info.frame.x0, info.frame.y0),
-                    radius=12.0)
+    info = render(
+        sim,
+        tmp_path / "cell.mkv",
+        px_per_cm=10,
+        fps=30,
+        noise=noise,
+        blur=blur,
+        illumination=0.2 if noise else 0.0,
+        seed=1,
+    )
+    tracked = track(
+        tmp_path / "cell.mkv", px_per_cm=10, origin=(info.frame.x0, info.frame.y0), radius=12.0
+    )
     truth = sim.interp(time=info.times).assign_coords(time=tracked.time.values)
     truth.attrs.update(softcell_origin="tracking")
     options = {"discard": 0.0, "threshold": 0.3}

@@ -86,16 +86,18 @@ class PlateCamera:
     def px_per_cm(self) -> float:
         """Mean scale (px per cm) at the plate's center, for sizes in pixels."""
         middle = self.plate_size / 2
-        return float(np.sqrt(abs(np.linalg.det(_homography_jacobian(self.homography, middle,
-                                                                      middle)))))
+        return float(
+            np.sqrt(abs(np.linalg.det(_homography_jacobian(self.homography, middle, middle))))
+        )
 
     def undistort(self, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Undistorted pixel positions of observed ones."""
         u, v = np.asarray(u, np.float64), np.asarray(v, np.float64)
         if self.camera_matrix is not None:
             pts = np.stack([u.ravel(), v.ravel()], axis=1).reshape(-1, 1, 2)
-            out = cv2.undistortPoints(pts, self.camera_matrix, self.distortion,
-                                      P=self.camera_matrix).reshape(-1, 2)
+            out = cv2.undistortPoints(
+                pts, self.camera_matrix, self.distortion, P=self.camera_matrix
+            ).reshape(-1, 2)
             return out[:, 0].reshape(u.shape), out[:, 1].reshape(v.shape)
         return _undistort(u, v, self.center, self.scale, self.k)
 
@@ -114,8 +116,9 @@ class PlateCamera:
         d = 1 + self.k * (du**2 + dv**2) / self.scale**2
         return self.center[0] + du * d, self.center[1] + dv * d
 
-    def to_world(self, u: np.ndarray, v: np.ndarray, z: float = 0.0
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def to_world(
+        self, u: np.ndarray, v: np.ndarray, z: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Plate points (cm) seen at pixels (u, v) of objects at height ``z`` (cm)."""
         uu, vv = self.undistort(u, v)
         inverse = np.linalg.inv(self.homography)
@@ -126,8 +129,9 @@ class PlateCamera:
             x, y = c[0] + (x - c[0]) * factor, c[1] + (y - c[1]) * factor
         return x, y
 
-    def to_pixels(self, x: np.ndarray, y: np.ndarray, z: float = 0.0
-                  ) -> tuple[np.ndarray, np.ndarray]:
+    def to_pixels(
+        self, x: np.ndarray, y: np.ndarray, z: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Pixels (u, v) where plate points (cm) at height ``z`` (cm) are seen."""
         x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
         if z:
@@ -145,8 +149,9 @@ class PlateCamera:
         y = np.concatenate([low, side, high, side[::-1]])
         u, v = self.to_pixels(x, y)
         mask = np.zeros((self.height, self.width), np.uint8)
-        cv2.fillPoly(mask, [np.rint(np.stack([u, v], axis=1) * 16).astype(np.int32)], 1,
-                     cv2.LINE_8, 4)
+        cv2.fillPoly(
+            mask, [np.rint(np.stack([u, v], axis=1) * 16).astype(np.int32)], 1, cv2.LINE_8, 4
+        )
         return mask
 
     def _position_for(self, z: float) -> np.ndarray:
@@ -154,17 +159,22 @@ class PlateCamera:
             raise CalibrationError(
                 f"an object height of {z:g} cm needs the camera's position above the plate, "
                 "which the plate alone did not give (the camera looks almost straight "
-                "down): pass the camera height (--camera-height, cm) or a calibration file")
+                "down): pass the camera height (--camera-height, cm) or a calibration file"
+            )
         if not z < self.position[2]:
-            raise CalibrationError(f"an object height of {z:g} cm is not below the camera "
-                                   f"({self.position[2]:.1f} cm above the plate)")
+            raise CalibrationError(
+                f"an object height of {z:g} cm is not below the camera "
+                f"({self.position[2]:.1f} cm above the plate)"
+            )
         return self.position
 
     def summary(self) -> dict[str, object]:
         """What the calibration found, for a file's attributes."""
-        out: dict[str, object] = {"px_per_cm": round(self.px_per_cm, 6),
-                                  "k": round(float(self.k), 6),
-                                  "principal_point_px": [float(c) for c in self.center]}
+        out: dict[str, object] = {
+            "px_per_cm": round(self.px_per_cm, 6),
+            "k": round(float(self.k), 6),
+            "principal_point_px": [float(c) for c in self.center],
+        }
         if self.position is not None:
             out["camera_position_cm"] = [round(float(c), 4) for c in self.position]
         return out
@@ -192,6 +202,7 @@ def _undistort(u, v, center, scale, k, iterations: int = 25):
 
 # --- finding the plate ------------------------------------------------------------------------
 
+
 def plate_corners(gray: np.ndarray) -> np.ndarray:
     """The plate's four corners (px) in a grey image: lower-left, lower-right, upper-right,
     upper-left as seen (image v down), from the largest bright region."""
@@ -199,8 +210,7 @@ def plate_corners(gray: np.ndarray) -> np.ndarray:
     level, mask = cv2.threshold(blurred, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     light, dark = blurred[mask > 0], blurred[mask == 0]
     if not light.size or not dark.size or np.median(light) - np.median(dark) < 20:
-        raise CalibrationError("no plate found: the frame shows no light square on a darker "
-                               "floor")
+        raise CalibrationError("no plate found: the frame shows no light square on a darker floor")
     mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((15, 15), np.uint8))
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
@@ -208,8 +218,10 @@ def plate_corners(gray: np.ndarray) -> np.ndarray:
     plate = max(contours, key=cv2.contourArea)
     area = cv2.contourArea(plate)
     if area < 0.1 * gray.size:
-        raise CalibrationError(f"no plate found: the largest bright region covers "
-                               f"{area / gray.size:.0%} of the frame (at least 10 % expected)")
+        raise CalibrationError(
+            f"no plate found: the largest bright region covers "
+            f"{area / gray.size:.0%} of the frame (at least 10 % expected)"
+        )
     hull = cv2.convexHull(plate)
     quad = None
     for eps in np.linspace(0.005, 0.08, 30):
@@ -218,12 +230,15 @@ def plate_corners(gray: np.ndarray) -> np.ndarray:
             quad = approx[:, 0, :].astype(np.float64)
             break
     if quad is None:
-        raise CalibrationError("the plate is not a quadrilateral in the frame: is it wholly "
-                               "in view, with its four corners visible?")
+        raise CalibrationError(
+            "the plate is not a quadrilateral in the frame: is it wholly "
+            "in view, with its four corners visible?"
+        )
     h, w = gray.shape
     if (quad.min(axis=0) < 3).any() or quad[:, 0].max() > w - 4 or quad[:, 1].max() > h - 4:
-        raise CalibrationError("the plate touches the frame's border: its four corners must "
-                               "be in view")
+        raise CalibrationError(
+            "the plate touches the frame's border: its four corners must be in view"
+        )
     # Order as seen: lower-left (largest v - u), then counter-clockwise on screen.
     start = int(np.argmax(quad[:, 1] - quad[:, 0]))
     quad = np.roll(quad, -start, axis=0)
@@ -248,8 +263,9 @@ def edge_points(gray: np.ndarray, corners: np.ndarray) -> list[np.ndarray]:
         base = a + s[:, None] * along
         pts = base[:, None, :] + offsets[None, :, None] * normal
         grid = pts.astype(np.float32)
-        profile = cv2.remap(image, grid[..., 0], grid[..., 1], cv2.INTER_LINEAR,
-                            borderMode=cv2.BORDER_REPLICATE)
+        profile = cv2.remap(
+            image, grid[..., 0], grid[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
         found = []
         for row, line in zip(base, profile, strict=True):
             lo, hi = np.percentile(line[:15], 50), np.percentile(line[-15:], 50)
@@ -262,8 +278,9 @@ def edge_points(gray: np.ndarray, corners: np.ndarray) -> list[np.ndarray]:
             t = offsets[i] + (offsets[i + 1] - offsets[i]) * rel[i] / (rel[i] - rel[i + 1])
             found.append(row + t * normal)
         if len(found) < EDGE_SAMPLES // 3:
-            raise CalibrationError(f"the plate's edge {k + 1} of 4 is not visible along most "
-                                   "of its length")
+            raise CalibrationError(
+                f"the plate's edge {k + 1} of 4 is not visible along most of its length"
+            )
         edges.append(np.array(found))
     return edges
 
@@ -282,9 +299,11 @@ def _fit_line(points: np.ndarray) -> np.ndarray:
     return np.array([n[0], n[1], -n @ mean])
 
 
-def estimate_distortion(edges: list[np.ndarray], center: tuple[float, float], scale: float
-                        ) -> float:
+def estimate_distortion(
+    edges: list[np.ndarray], center: tuple[float, float], scale: float
+) -> float:
     """The radial coefficient k that makes the edges straightest (least squares)."""
+
     def cost(k: float) -> float:
         total = 0.0
         for pts in edges:
@@ -292,19 +311,25 @@ def estimate_distortion(edges: list[np.ndarray], center: tuple[float, float], sc
             total += float(np.sum(_line_residuals(np.stack([u, v], axis=1)) ** 2))
         return total
 
-    result = minimize_scalar(cost, bounds=(-MAX_K, MAX_K), method="bounded",
-                             options={"xatol": 1e-6})
+    result = minimize_scalar(
+        cost, bounds=(-MAX_K, MAX_K), method="bounded", options={"xatol": 1e-6}
+    )
     if abs(result.x) > 0.98 * MAX_K:
-        raise CalibrationError(f"the lens distortion is beyond |k| = {MAX_K} (k = "
-                               f"{result.x:.3f}): calibrate the camera with a checkerboard "
-                               "and pass its file")
+        raise CalibrationError(
+            f"the lens distortion is beyond |k| = {MAX_K} (k = "
+            f"{result.x:.3f}): calibrate the camera with a checkerboard "
+            "and pass its file"
+        )
     return float(result.x)
 
 
-def calibrate_from_plate(image: np.ndarray, plate_size: float, *,
-                         camera_height: float | None = None,
-                         calibration: tuple[np.ndarray, np.ndarray] | None = None
-                         ) -> PlateCamera:
+def calibrate_from_plate(
+    image: np.ndarray,
+    plate_size: float,
+    *,
+    camera_height: float | None = None,
+    calibration: tuple[np.ndarray, np.ndarray] | None = None,
+) -> PlateCamera:
     """A :class:`PlateCamera` from one frame that shows the whole plate.
 
     Parameters
@@ -324,11 +349,13 @@ def calibrate_from_plate(image: np.ndarray, plate_size: float, *,
         When the plate is not wholly in view, or the calibration fails.
     """
     if not (np.isfinite(plate_size) and plate_size > 0):
-        raise CalibrationError(f"plate_size = {plate_size} is not allowed: must be finite "
-                               "and > 0 cm")
+        raise CalibrationError(
+            f"plate_size = {plate_size} is not allowed: must be finite and > 0 cm"
+        )
     if camera_height is not None and not (np.isfinite(camera_height) and camera_height > 0):
-        raise CalibrationError(f"camera_height = {camera_height} is not allowed: must be "
-                               "finite and > 0 cm")
+        raise CalibrationError(
+            f"camera_height = {camera_height} is not allowed: must be finite and > 0 cm"
+        )
     gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     h, w = gray.shape
     corners = plate_corners(gray)
@@ -343,8 +370,10 @@ def calibrate_from_plate(image: np.ndarray, plate_size: float, *,
     else:
         center = ((w - 1) / 2, (h - 1) / 2)
         k = estimate_distortion(edges, center, scale)
-        lines = [_fit_line(np.stack(_undistort(p[:, 0], p[:, 1], center, scale, k), axis=1))
-                 for p in edges]
+        lines = [
+            _fit_line(np.stack(_undistort(p[:, 0], p[:, 1], center, scale, k), axis=1))
+            for p in edges
+        ]
         matrix = dist = None
     # Corner k is where edge k-1 meets edge k.
     image_corners = []
@@ -372,8 +401,9 @@ def _homography(plate: np.ndarray, corners: np.ndarray) -> np.ndarray:
 
 def _pose(h: np.ndarray, center: tuple[float, float], focal: float) -> np.ndarray:
     """Camera center (cm, plate frame) of a plate homography, given the focal length (px)."""
-    k_inv = np.array([[1 / focal, 0, -center[0] / focal], [0, 1 / focal, -center[1] / focal],
-                      [0, 0, 1]])
+    k_inv = np.array(
+        [[1 / focal, 0, -center[0] / focal], [0, 1 / focal, -center[1] / focal], [0, 0, 1]]
+    )
     m = k_inv @ h
     lam = 2 / (np.linalg.norm(m[:, 0]) + np.linalg.norm(m[:, 1]))
     r1, r2, t = lam * m[:, 0], lam * m[:, 1], lam * m[:, 2]
@@ -383,19 +413,26 @@ def _pose(h: np.ndarray, center: tuple[float, float], focal: float) -> np.ndarra
     return c if c[2] > 0 else -c
 
 
-def _camera_position(h: np.ndarray, center: tuple[float, float], focal: float | None,
-                     camera_height: float | None, scale: float) -> np.ndarray | None:
+def _camera_position(
+    h: np.ndarray,
+    center: tuple[float, float],
+    focal: float | None,
+    camera_height: float | None,
+    scale: float,
+) -> np.ndarray | None:
     if focal is not None:
         return _pose(h, center, focal)
     if camera_height is not None:
         # The focal length that puts the camera at the given height.
         def gap(f: float) -> float:
             return float(_pose(h, center, f)[2] - camera_height)
+
         try:
             focal = brentq(gap, 0.1 * scale, 20 * scale, xtol=1e-6)
         except ValueError:
-            raise CalibrationError(f"no camera at {camera_height:g} cm above the plate fits "
-                                   "the plate's image") from None
+            raise CalibrationError(
+                f"no camera at {camera_height:g} cm above the plate fits the plate's image"
+            ) from None
         return _pose(h, center, focal)
     # The focal length from the homography alone (a square-pixel camera): its rotation's
     # first two columns are orthogonal and of equal length. Ill-posed when looking straight
@@ -404,13 +441,13 @@ def _camera_position(h: np.ndarray, center: tuple[float, float], focal: float | 
     m = c @ h
     m = m / np.linalg.norm(m)
     h1, h2 = m[:, 0], m[:, 1]
-    a = np.array([h1[0] * h2[0] + h1[1] * h2[1],
-                  h1[0] ** 2 + h1[1] ** 2 - h2[0] ** 2 - h2[1] ** 2])
+    a = np.array([h1[0] * h2[0] + h1[1] * h2[1], h1[0] ** 2 + h1[1] ** 2 - h2[0] ** 2 - h2[1] ** 2])
     b = np.array([h1[2] * h2[2], h1[2] ** 2 - h2[2] ** 2])
     each = -a / np.where(b == 0, np.nan, b)  # f^2 from either condition
     w = -float(a @ b) / float(b @ b) if b @ b > 0 else np.nan  # both, least squares
-    if not (np.isfinite(each).all() and (each > 0).all() and w > 0
-            and each.max() < 2.25 * each.min()):
+    if not (
+        np.isfinite(each).all() and (each > 0).all() and w > 0 and each.max() < 2.25 * each.min()
+    ):
         return None  # the two disagree by more than 1.5x in f: looking (almost) straight down
     return _pose(h, center, np.sqrt(w))
 
@@ -433,6 +470,7 @@ def read_calibration(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if matrix is None or matrix.shape != (3, 3) or not np.isfinite(matrix).all():
         raise CalibrationError(f"calibration file {path} has no 3 x 3 camera_matrix")
     if dist is None or dist.size not in (4, 5, 8, 12, 14):
-        raise CalibrationError(f"calibration file {path} has no distortion_coefficients "
-                               "(4, 5, 8, 12 or 14 numbers)")
+        raise CalibrationError(
+            f"calibration file {path} has no distortion_coefficients (4, 5, 8, 12 or 14 numbers)"
+        )
     return matrix.astype(np.float64), dist.astype(np.float64).ravel()

@@ -37,8 +37,9 @@ def _pivot_side(sign: np.ndarray, pivot: str | None) -> np.ndarray:
     raise ValueError(f"pivot must be None, 'inner' or 'fixed', not {pivot!r}")
 
 
-def cycle_displacements(params: Parameters, rng: np.random.Generator, cycles: int,
-                        pivot: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def cycle_displacements(
+    params: Parameters, rng: np.random.Generator, cycles: int, pivot: str | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact world-frame displacement (complex, cm) and duration (s) of ``cycles`` run+tumble
     cycles of the free bot, starting with heading 0.
 
@@ -57,8 +58,7 @@ def cycle_displacements(params: Parameters, rng: np.random.Generator, cycles: in
     return np.exp(1j * heading) * body, tau_r + tau_t
 
 
-def diffusion_from_cycles(displacement: np.ndarray, duration: np.ndarray, lags: int = 5
-                          ) -> float:
+def diffusion_from_cycles(displacement: np.ndarray, duration: np.ndarray, lags: int = 5) -> float:
     """Long-time D (MSD -> 4 D t, cm^2/s) from a sequence of cycle displacements: the sum of
     their empirical correlations up to ``lags`` cycles over four times the mean cycle time."""
     total = np.mean(np.abs(displacement) ** 2)
@@ -114,8 +114,7 @@ def renewal_diffusion(params: Parameters, pivot: str | None = None) -> float:
             # <conj(b) e^{i phi}> with b = v tau_r + p, tau_r independent of phi
             wp = v * mean_tau * e1 + np.conj(sp * d * 1j) * (e1 - 1.0)
             # <|b|^2> = v^2 <tau^2> + 2 v <tau> Re<p> + <|p|^2>, |p|^2 = 2 d^2 (1 - cos phi)
-            b2p = (v**2 * mean_tau2 + 2 * v * mean_tau * mp.real
-                   + 2 * d**2 * (1 - e1.real))
+            b2p = v**2 * mean_tau2 + 2 * v * mean_tau * mp.real + 2 * d**2 * (1 - e1.real)
             terms.append((v * mean_tau + mp, wp, b2p))
         m = 0.5 * (terms[0][0] + terms[1][0])
         w = 0.5 * (terms[0][1] + terms[1][1])

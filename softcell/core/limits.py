@@ -76,9 +76,11 @@ def realization_bytes(params) -> dict[str, float]:
     unknowns = 2 * (2 * cutoff + 1) + 3
     per_sample = 16 * (2 * cutoff + 1) + 40 + SAMPLE_OVERHEAD * sample_bytes(params)
     phases = float(params.duration) / float(params.phase_min) + 2
-    return {"nodes": float(params.nodes) * BYTES_PER_NODE,
-            "cutoff": 8.0 * unknowns**2 * 8,  # rodas4's Jacobian, LU and stage matrices
-            "duration": sample_count(params) * per_sample + 17 * phases}
+    return {
+        "nodes": float(params.nodes) * BYTES_PER_NODE,
+        "cutoff": 8.0 * unknowns**2 * 8,  # rodas4's Jacobian, LU and stage matrices
+        "duration": sample_count(params) * per_sample + 17 * phases,
+    }
 
 
 def check_run(params, memory: int | None = None) -> None:
@@ -105,10 +107,14 @@ def check_run(params, memory: int | None = None) -> None:
         largest = 2 ** math.floor(math.log2(max(room / BYTES_PER_NODE, 1.0)))
     unit = "" if spec.unit == "1" else f" {spec.unit}"
     shown = f"{int(largest)}" if spec.kind is int else f"{largest:.3g}"
-    raise ParameterError(name, params[name], f"must be <= {shown}{unit}: one realization "
-                         f"would need {human_bytes(total)} of memory, more than "
-                         f"{MEMORY_FRACTION:.0%} of this machine's {human_bytes(memory)}",
-                         spec.unit)
+    raise ParameterError(
+        name,
+        params[name],
+        f"must be <= {shown}{unit}: one realization "
+        f"would need {human_bytes(total)} of memory, more than "
+        f"{MEMORY_FRACTION:.0%} of this machine's {human_bytes(memory)}",
+        spec.unit,
+    )
 
 
 def max_radius(contact_length: float) -> float:
@@ -119,6 +125,8 @@ def max_radius(contact_length: float) -> float:
 def check_seed(seed: object) -> int:
     """The root seed as an int in 0 .. 2**64 - 1, or a one-line error."""
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-        raise SoftcellError(f"seed = {seed!r} is not allowed: must be an integer between 0 and "
-                            f"2**64 - 1 = {MAX_SEED} (it is stored in every file)")
+        raise SoftcellError(
+            f"seed = {seed!r} is not allowed: must be an integer between 0 and "
+            f"2**64 - 1 = {MAX_SEED} (it is stored in every file)"
+        )
     return seed

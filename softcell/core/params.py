@@ -111,8 +111,12 @@ class ParameterSpec:
         assert isinstance(value, int | float)
         if not math.isfinite(value):
             rest = self.allowed().removeprefix("must be ")
-            raise ParameterError(self.name, value, "must be finite" if rest.startswith(
-                "any finite") else f"must be finite and {rest}", self.unit)
+            raise ParameterError(
+                self.name,
+                value,
+                "must be finite" if rest.startswith("any finite") else f"must be finite and {rest}",
+                self.unit,
+            )
         ok = True
         if self.minimum is not None:
             ok = value >= self.minimum if self.minimum_inclusive else value > self.minimum
@@ -133,14 +137,30 @@ MODEL_PARAMETERS: dict[str, ParameterSpec] = {
     spec.name: spec
     for spec in (
         _positive("radius", 4.0, "cm", "unstretched membrane radius R (l0 = 2 pi R)"),
-        ParameterSpec("nodes", 1024, "1", "membrane collocation points N", kind=int,
-                      minimum=8, minimum_inclusive=True, power_of_two=True),
-        ParameterSpec("cutoff", 16, "1", "Fourier cutoff Lambda_c of the membrane shape",
-                      kind=int, minimum=2, minimum_inclusive=True),
+        ParameterSpec(
+            "nodes",
+            1024,
+            "1",
+            "membrane collocation points N",
+            kind=int,
+            minimum=8,
+            minimum_inclusive=True,
+            power_of_two=True,
+        ),
+        ParameterSpec(
+            "cutoff",
+            16,
+            "1",
+            "Fourier cutoff Lambda_c of the membrane shape",
+            kind=int,
+            minimum=2,
+            minimum_inclusive=True,
+        ),
         _positive("bending_stiffness", 0.57, "N cm2", "bending stiffness k"),
         _positive("tension", 0.02, "N cm-2", "surface tension coefficient alpha"),
-        _positive("membrane_friction", 3.42e-4, "N s cm-2",
-                  "membrane friction per unit length gamma_mem"),
+        _positive(
+            "membrane_friction", 3.42e-4, "N s cm-2", "membrane friction per unit length gamma_mem"
+        ),
         _positive("contact_amplitude", 2.85e-4, "N", "bot-membrane interaction amplitude A"),
         _positive("contact_length", 0.01, "cm", "bot-membrane interaction length lambda"),
         _positive("bot_semi_major", 3.0, "cm", "bot semi-major axis a"),
@@ -148,26 +168,51 @@ MODEL_PARAMETERS: dict[str, ParameterSpec] = {
         _positive("drive_force", 0.04275, "N", "bot drive force F0"),
         _positive("drive_torque", 151.1, "N cm", "bot drive torque T0"),
         _positive("bot_friction", 0.00285, "N s cm-1", "bot translational friction gamma_T"),
-        _positive("bot_rotational_friction", 28.5, "N cm s",
-                  "bot rotational friction gamma_R"),
+        _positive("bot_rotational_friction", 28.5, "N cm s", "bot rotational friction gamma_R"),
         _positive("phase_min", 0.4, "s", "shortest run or tumble tau_l"),
         _positive("phase_max", 1.2, "s", "longest run or tumble tau_h"),
         _positive("dt", 1e-6, "s", "time step of the explicit_euler integrator"),
-        ParameterSpec("pivot_offset", 1.0, "cm",
-                      "offset of the tumble pivot along the minor axis d_pivot",
-                      minimum=0.0, minimum_inclusive=True),
-        ParameterSpec("pivot_side", "inner", "1",
-                      "side of the tumble pivot: inner side of each turn, or fixed",
-                      kind=str, choices=("inner", "fixed")),
-        _positive("duration", None, "s",
-                  "simulated duration (default 900 s for R < 10 cm, 1800 s otherwise)"),
+        ParameterSpec(
+            "pivot_offset",
+            1.0,
+            "cm",
+            "offset of the tumble pivot along the minor axis d_pivot",
+            minimum=0.0,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "pivot_side",
+            "inner",
+            "1",
+            "side of the tumble pivot: inner side of each turn, or fixed",
+            kind=str,
+            choices=("inner", "fixed"),
+        ),
+        _positive(
+            "duration",
+            None,
+            "s",
+            "simulated duration (default 900 s for R < 10 cm, 1800 s otherwise)",
+        ),
         _positive("sample_every", 0.01, "s", "sampling interval before sample_switch"),
         _positive("sample_every_late", 0.1, "s", "sampling interval from sample_switch on"),
-        ParameterSpec("sample_switch", 100.0, "s",
-                      "time at which sampling changes to sample_every_late",
-                      minimum=0.0, minimum_inclusive=True),
-        ParameterSpec("stored_nodes", 64, "1", "membrane points written to files", kind=int,
-                      minimum=1, minimum_inclusive=True),
+        ParameterSpec(
+            "sample_switch",
+            100.0,
+            "s",
+            "time at which sampling changes to sample_every_late",
+            minimum=0.0,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "stored_nodes",
+            64,
+            "1",
+            "membrane points written to files",
+            kind=int,
+            minimum=1,
+            minimum_inclusive=True,
+        ),
     )
 }
 
@@ -182,29 +227,50 @@ def _derived_default(name: str, values: Mapping[str, Value]) -> Value:
 def _cross_check(v: Mapping[str, Value]) -> None:
     """The rules of docs/model.md §2 that involve more than one parameter."""
     if v["radius"] <= v["bot_semi_major"]:
-        raise ParameterError("radius", v["radius"],
-                             f"must be > bot_semi_major = {v['bot_semi_major']:g} cm", "cm")
+        raise ParameterError(
+            "radius", v["radius"], f"must be > bot_semi_major = {v['bot_semi_major']:g} cm", "cm"
+        )
     if v["radius"] > max_radius(v["contact_length"]):
-        raise ParameterError("radius", v["radius"],
-                             f"must be <= {max_radius(v['contact_length']):.3g} cm: beyond it, "
-                             "float64 positions (relative rounding 2.2e-16) no longer resolve "
-                             f"the contact length lambda = {v['contact_length']:g} cm", "cm")
+        raise ParameterError(
+            "radius",
+            v["radius"],
+            f"must be <= {max_radius(v['contact_length']):.3g} cm: beyond it, "
+            "float64 positions (relative rounding 2.2e-16) no longer resolve "
+            f"the contact length lambda = {v['contact_length']:g} cm",
+            "cm",
+        )
     if v["bot_semi_minor"] > v["bot_semi_major"]:
-        raise ParameterError("bot_semi_minor", v["bot_semi_minor"],
-                             f"must be <= bot_semi_major = {v['bot_semi_major']:g} cm", "cm")
+        raise ParameterError(
+            "bot_semi_minor",
+            v["bot_semi_minor"],
+            f"must be <= bot_semi_major = {v['bot_semi_major']:g} cm",
+            "cm",
+        )
     if v["cutoff"] >= v["nodes"] // 2:
-        raise ParameterError("cutoff", v["cutoff"],
-                             f"must be < nodes/2 = {v['nodes'] // 2} (nodes = {v['nodes']})", "1")
+        raise ParameterError(
+            "cutoff",
+            v["cutoff"],
+            f"must be < nodes/2 = {v['nodes'] // 2} (nodes = {v['nodes']})",
+            "1",
+        )
     if v["stored_nodes"] <= 2 * v["cutoff"]:
-        raise ParameterError("stored_nodes", v["stored_nodes"],
-                             f"must be > 2 * cutoff = {2 * v['cutoff']} so the shape is "
-                             "resampled exactly", "1")
+        raise ParameterError(
+            "stored_nodes",
+            v["stored_nodes"],
+            f"must be > 2 * cutoff = {2 * v['cutoff']} so the shape is resampled exactly",
+            "1",
+        )
     if v["phase_min"] > v["phase_max"]:
-        raise ParameterError("phase_min", v["phase_min"],
-                             f"must be <= phase_max = {v['phase_max']:g} s", "s")
+        raise ParameterError(
+            "phase_min", v["phase_min"], f"must be <= phase_max = {v['phase_max']:g} s", "s"
+        )
     if v["sample_every_late"] < v["sample_every"]:
-        raise ParameterError("sample_every_late", v["sample_every_late"],
-                             f"must be >= sample_every = {v['sample_every']:g} s", "s")
+        raise ParameterError(
+            "sample_every_late",
+            v["sample_every_late"],
+            f"must be >= sample_every = {v['sample_every']:g} s",
+            "s",
+        )
 
 
 def suggest(name: str, known: Iterable[str]) -> str:
@@ -242,8 +308,9 @@ class Parameters(Mapping[str, Value]):
 
     __slots__ = ("specs", "_given", "_values")
 
-    def __init__(self, values: Mapping[str, Any] | None = None,
-                 extra_specs: Iterable[ParameterSpec] = ()) -> None:
+    def __init__(
+        self, values: Mapping[str, Any] | None = None, extra_specs: Iterable[ParameterSpec] = ()
+    ) -> None:
         specs = merge_specs(MODEL_PARAMETERS.values(), extra_specs)
         given = {k: v for k, v in (values or {}).items() if v is not None}
         unknown = [k for k in given if k not in specs]
@@ -321,8 +388,9 @@ class Parameters(Mapping[str, Value]):
         }
 
     @classmethod
-    def from_attrs(cls, attrs: Mapping[str, Any],
-                   extra_specs: Iterable[ParameterSpec] = ()) -> Parameters:
+    def from_attrs(
+        cls, attrs: Mapping[str, Any], extra_specs: Iterable[ParameterSpec] = ()
+    ) -> Parameters:
         """Rebuild the parameters stored by :meth:`to_attrs` in a file's attributes (values
         in the units of ``softcell_parameter_units``)."""
         try:
@@ -337,8 +405,10 @@ def merge_specs(*groups: Iterable[ParameterSpec]) -> dict[str, ParameterSpec]:
     merged: dict[str, ParameterSpec] = {}
     for spec in itertools.chain(*groups):
         if spec.name in merged and merged[spec.name] != spec:
-            raise ConfigError(f"parameter {spec.name!r} is declared twice, differently: "
-                              f"{merged[spec.name]} and {spec}")
+            raise ConfigError(
+                f"parameter {spec.name!r} is declared twice, differently: "
+                f"{merged[spec.name]} and {spec}"
+            )
         merged[spec.name] = spec
     return merged
 
@@ -364,8 +434,9 @@ def parameter_attrs(values: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def expand_sweep(values: Mapping[str, Any], extra_specs: Sequence[ParameterSpec] = ()
-                 ) -> list[tuple[dict[str, Value], Parameters]]:
+def expand_sweep(
+    values: Mapping[str, Any], extra_specs: Sequence[ParameterSpec] = ()
+) -> list[tuple[dict[str, Value], Parameters]]:
     """Expand list-valued parameters into the grid of parameter points they span.
 
     Parameters

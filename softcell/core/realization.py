@@ -27,8 +27,9 @@ SAMPLES_PER_CALL = 100
 
 def realization_rng(seed: int, point: int, realization: int) -> np.random.Generator:
     """The Generator of one realization: SeedSequence(seed, spawn_key=(point, realization))."""
-    return np.random.Generator(np.random.PCG64(
-        np.random.SeedSequence(seed, spawn_key=(point, realization))))
+    return np.random.Generator(
+        np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(point, realization)))
+    )
 
 
 @dataclass
@@ -51,11 +52,17 @@ class Checkpoint(Protocol):
         """Keep ``saved`` (replacing what was kept before), all or nothing."""
 
 
-def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
-                    label: object = 0, checkpoint: Checkpoint | None = None,
-                    checkpoint_every: float = CHECKPOINT_EVERY,
-                    progress: Callable[[float], None] | None = None,
-                    stop: Callable[[], bool] | None = None) -> Record:
+def run_realization(
+    model: Model,
+    stepper: Stepper,
+    rng: np.random.Generator,
+    *,
+    label: object = 0,
+    checkpoint: Checkpoint | None = None,
+    checkpoint_every: float = CHECKPOINT_EVERY,
+    progress: Callable[[float], None] | None = None,
+    stop: Callable[[], bool] | None = None,
+) -> Record:
     """Integrate one realization over the sampling grid of ``model.params``.
 
     Parameters
@@ -94,8 +101,9 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
         first = 1
 
     def keep(next_sample: int, kept_state: dict[str, np.ndarray]) -> None:
-        checkpoint.save(Saved(next_sample, rec_modes[:next_sample], rec_pose[:next_sample],
-                              kept_state))
+        checkpoint.save(
+            Saved(next_sample, rec_modes[:next_sample], rec_pose[:next_sample], kept_state)
+        )
 
     done, done_state = first, _copy_state(state)  # the last consistent point
     try:
@@ -115,9 +123,10 @@ def run_realization(model: Model, stepper: Stepper, rng: np.random.Generator, *,
         # The stepper may have been stopped half way through a chunk: save what is whole.
         if checkpoint is not None:
             keep(done, done_state)
-        raise Interrupted(f"interrupted at t = {times[done - 1]:.2f} s of {label}"
-                          + ("; rerun the same command to resume" if checkpoint else "")
-                          ) from None
+        raise Interrupted(
+            f"interrupted at t = {times[done - 1]:.2f} s of {label}"
+            + ("; rerun the same command to resume" if checkpoint else "")
+        ) from None
     return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
 
 
@@ -125,9 +134,16 @@ def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: np.array(v, copy=True) for k, v in state.items()}
 
 
-def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
-                   components: dict[str, object], extra_attrs: dict[str, object] | None = None,
-                   scalar_coords: tuple[str, ...] = ("radius",)):
+def record_dataset(
+    record: Record,
+    model: Model,
+    *,
+    realization: int,
+    seed: int,
+    components: dict[str, object],
+    extra_attrs: dict[str, object] | None = None,
+    scalar_coords: tuple[str, ...] = ("radius",),
+):
     """The simulation Dataset (schema of :mod:`softcell.core.schema`) of one realization;
     the parameters ``scalar_coords`` are also its scalar coordinates."""
     # Imported here: the loop above needs no xarray (about 70 MiB), only the Dataset does.
@@ -142,8 +158,19 @@ def record_dataset(record: Record, model: Model, *, realization: int, seed: int,
         mx = my = np.full((record.times.size, nodes), np.nan)
         cell = np.full(record.times.size, np.nan + 0j)
     return simulation_dataset(
-        record.times, np.array([realization]), membrane_x=mx[None], membrane_y=my[None],
-        cell_x=cell.real[None], cell_y=cell.imag[None], bot_x=record.pose[None, :, 0],
-        bot_y=record.pose[None, :, 1], bot_angle=record.pose[None, :, 2],
-        bot_phase=record.phase[None], parameters=model.params, seed=seed,
-        components=components, extra_attrs=extra_attrs, scalar_coords=scalar_coords)
+        record.times,
+        np.array([realization]),
+        membrane_x=mx[None],
+        membrane_y=my[None],
+        cell_x=cell.real[None],
+        cell_y=cell.imag[None],
+        bot_x=record.pose[None, :, 0],
+        bot_y=record.pose[None, :, 1],
+        bot_angle=record.pose[None, :, 2],
+        bot_phase=record.phase[None],
+        parameters=model.params,
+        seed=seed,
+        components=components,
+        extra_attrs=extra_attrs,
+        scalar_coords=scalar_coords,
+    )

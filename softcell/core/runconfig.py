@@ -49,13 +49,20 @@ class RunConfig:
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
     run: dict[str, Any] = field(default_factory=dict)
 
-    def updated(self, parameters: Mapping[str, Any] = (), components: Mapping[str, Any] = (),
-                run: Mapping[str, Any] = ()) -> RunConfig:
+    def updated(
+        self,
+        parameters: Mapping[str, Any] = (),
+        components: Mapping[str, Any] = (),
+        run: Mapping[str, Any] = (),
+    ) -> RunConfig:
         """A copy with some entries replaced (command-line flags over a file); parameter
         values in the units of ``softcell params``."""
-        return dataclasses.replace(self, parameters={**self.parameters, **dict(parameters)},
-                                   components={**self.components, **dict(components)},
-                                   run={**self.run, **dict(run)})
+        return dataclasses.replace(
+            self,
+            parameters={**self.parameters, **dict(parameters)},
+            components={**self.components, **dict(components)},
+            run={**self.run, **dict(run)},
+        )
 
     def check_components(self) -> None:
         """Raise :class:`ConfigError` unless every component named exists in the registry
@@ -66,12 +73,13 @@ class RunConfig:
         registry = get_registry()
         terms = self.components.get("energy_terms", [])
         if isinstance(terms, str) or not isinstance(terms, list | tuple):
-            raise ConfigError(f"energy_terms = {terms!r} is not allowed: must be a list of "
-                              "names")
+            raise ConfigError(f"energy_terms = {terms!r} is not allowed: must be a list of names")
         for name in terms:
             if list(terms).count(name) > 1:
-                raise ConfigError(f"energy term {name!r} is named twice in energy_terms = "
-                                  f"{list(terms)}: each term counts once")
+                raise ConfigError(
+                    f"energy term {name!r} is named twice in energy_terms = "
+                    f"{list(terms)}: each term counts once"
+                )
             registry.get("energy_term", name)
         for kind in ("driving_protocol", "friction_law", "integrator", "stopgo_detector"):
             name = self.components.get(kind)
@@ -97,20 +105,26 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
     """
     for section, value in data.items():
         if section not in SECTIONS:
-            raise ConfigError(f"{source}: unknown table [{section}]{suggest(section, SECTIONS)}; "
-                              f"tables: {', '.join(SECTIONS)}")
+            raise ConfigError(
+                f"{source}: unknown table [{section}]{suggest(section, SECTIONS)}; "
+                f"tables: {', '.join(SECTIONS)}"
+            )
         if not isinstance(value, dict):
             raise ConfigError(f"{source}: {section} must be a table, [{section}]")
     components = dict(data.get("components", {}))
     for kind in components:
         if kind not in DEFAULT_COMPONENTS:
-            raise ConfigError(f"{source}: unknown component kind {kind!r}"
-                              f"{suggest(kind, DEFAULT_COMPONENTS)}")
+            raise ConfigError(
+                f"{source}: unknown component kind {kind!r}{suggest(kind, DEFAULT_COMPONENTS)}"
+            )
     run = dict(data.get("run", {}))
     for key, value in run.items():
         if key not in RUN_KEYS:
             raise ConfigError(f"{source}: unknown [run] key {key!r}{suggest(key, RUN_KEYS)}")
         if not isinstance(value, RUN_KEYS[key]) or isinstance(value, bool):
             raise ConfigError(f"{source}: [run] {key} = {value!r} must be an integer")
-    return RunConfig(parameters=dict(data.get("parameters", {})),
-                     components={**DEFAULT_COMPONENTS, **components}, run=run)
+    return RunConfig(
+        parameters=dict(data.get("parameters", {})),
+        components={**DEFAULT_COMPONENTS, **components},
+        run=run,
+    )

@@ -55,7 +55,8 @@ class VariableSpec:
 
 
 COORDINATES: dict[str, VariableSpec] = {
-    v.name: v for v in (
+    v.name: v
+    for v in (
         VariableSpec("realization", ("realization",), "i", "1", "realization index"),
         VariableSpec("time", ("time",), "f", "s", "time since the start of the record"),
         VariableSpec("node", ("node",), "i", "1", "membrane node index"),
@@ -63,21 +64,33 @@ COORDINATES: dict[str, VariableSpec] = {
 }
 
 VARIABLES: dict[str, VariableSpec] = {
-    v.name: v for v in (
-        VariableSpec("membrane_x", ("realization", "time", "node"), "f", "cm",
-                     "membrane point x coordinate"),
-        VariableSpec("membrane_y", ("realization", "time", "node"), "f", "cm",
-                     "membrane point y coordinate"),
-        VariableSpec("cell_x", ("realization", "time"), "f", "cm",
-                     "cell geometric center x coordinate"),
-        VariableSpec("cell_y", ("realization", "time"), "f", "cm",
-                     "cell geometric center y coordinate"),
+    v.name: v
+    for v in (
+        VariableSpec(
+            "membrane_x", ("realization", "time", "node"), "f", "cm", "membrane point x coordinate"
+        ),
+        VariableSpec(
+            "membrane_y", ("realization", "time", "node"), "f", "cm", "membrane point y coordinate"
+        ),
+        VariableSpec(
+            "cell_x", ("realization", "time"), "f", "cm", "cell geometric center x coordinate"
+        ),
+        VariableSpec(
+            "cell_y", ("realization", "time"), "f", "cm", "cell geometric center y coordinate"
+        ),
         VariableSpec("bot_x", ("realization", "time"), "f", "cm", "bot center x coordinate"),
         VariableSpec("bot_y", ("realization", "time"), "f", "cm", "bot center y coordinate"),
-        VariableSpec("bot_angle", ("realization", "time"), "f", "rad",
-                     "bot heading (major axis direction)"),
-        VariableSpec("bot_phase", ("realization", "time"), "i", "1", "bot driving phase",
-                     {"flag_values": PHASE_FLAGS, "flag_meanings": PHASE_MEANINGS}),
+        VariableSpec(
+            "bot_angle", ("realization", "time"), "f", "rad", "bot heading (major axis direction)"
+        ),
+        VariableSpec(
+            "bot_phase",
+            ("realization", "time"),
+            "i",
+            "1",
+            "bot driving phase",
+            {"flag_values": PHASE_FLAGS, "flag_meanings": PHASE_MEANINGS},
+        ),
     )
 }
 
@@ -88,87 +101,230 @@ SWEEP = "..."
 #: The analysis Dataset's variables, in the order they are written (:func:`analyze` fills
 #: them; ``flag_values`` of the two coded variables are the codes above). Over a radius sweep
 #: it also holds the scaling-collapse variables along ``collapse_variant``.
-ANALYSIS_VARIABLES: dict[str, VariableSpec] = {v.name: v for v in (
-    VariableSpec("msd", (SWEEP, "body", "lag"), "f", "cm2",
-                 "mean-squared displacement, pooled over realizations"),
-    VariableSpec("msd_sem", (SWEEP, "body", "lag"), "f", "cm2",
-                 "standard error of the MSD across realizations"),
-    VariableSpec("msd_pairs", (SWEEP, "body", "lag"), "f", "1", "number of displacement pairs"),
-    VariableSpec("msd_realization", (SWEEP, "body", "realization", "lag"), "f", "cm2",
-                 "mean-squared displacement of each realization"),
-    VariableSpec("msd_theory", (SWEEP, "body", "lag"), "f", "cm2",
-                 "run-and-tumble theory 2 v0_hat^2 (tau <tau_g> - <tau_g>^2 (1 - "
-                 "exp(-tau/<tau_g>)))"),
-    VariableSpec("speed", (SWEEP, "body", "realization", "time"), "f", "cm s-1",
-                 "speed, forward difference within a sampling segment"),
-    VariableSpec("stopgo_label", (SWEEP, "body", "realization", "time"), "i", "1",
-                 "stop/go label",
-                 {"flag_values": STOPGO_FLAGS, "flag_meanings": STOPGO_MEANINGS}),
-    VariableSpec("go_duration", (SWEEP, "body", "event"), "f", "s",
-                 "duration of a complete go phase, (n - 1) dt"),
-    VariableSpec("stop_duration", (SWEEP, "body", "event"), "f", "s",
-                 "duration of a complete stop phase, (n - 1) dt"),
-    VariableSpec("go_pdf", (SWEEP, "body", "scaled_duration"), "f", "1",
-                 "probability density of go durations over their mean"),
-    VariableSpec("stop_pdf", (SWEEP, "body", "scaled_duration"), "f", "1",
-                 "probability density of stop durations over their mean"),
-    VariableSpec("mean_go_duration_shifted", (SWEEP, "body", "threshold_shift"), "f", "s",
-                 "mean go duration with the threshold shifted"),
-    VariableSpec("mean_stop_duration_shifted", (SWEEP, "body", "threshold_shift"), "f", "s",
-                 "mean stop duration with the threshold shifted"),
-    VariableSpec("mean_speed", (SWEEP, "body"), "f", "cm s-1",
-                 "mean speed (finest sampling segment)"),
-    VariableSpec("v0_hat", (SWEEP, "body"), "f", "cm s-1",
-                 "root mean square speed sqrt(mean^2 + variance), stops included (theory's "
-                 "v0 hat)"),
-    VariableSpec("mean_go_duration", (SWEEP, "body"), "f", "s", "mean go duration <tau_g>"),
-    VariableSpec("mean_stop_duration", (SWEEP, "body"), "f", "s", "mean stop duration <tau_s>"),
-    VariableSpec("go_fraction", (SWEEP, "body"), "f", "1",
-                 "fraction of labelled samples that are go"),
-    VariableSpec("go_ks_statistic", (SWEEP, "body"), "f", "1",
-                 "Kolmogorov-Smirnov distance of t/<t> (go) to exp(-t')"),
-    VariableSpec("go_ks_pvalue", (SWEEP, "body"), "f", "1",
-                 "p-value of go_ks_statistic (fully specified law)"),
-    VariableSpec("stop_ks_statistic", (SWEEP, "body"), "f", "1",
-                 "Kolmogorov-Smirnov distance of t/<t> (stop) to exp(-t')"),
-    VariableSpec("stop_ks_pvalue", (SWEEP, "body"), "f", "1",
-                 "p-value of stop_ks_statistic (fully specified law)"),
-    VariableSpec("ballistic_velocity", (SWEEP, "body"), "f", "cm s-1",
-                 "v of the fit MSD = v^2 tau^2 at short lags"),
-    VariableSpec("ballistic_velocity_error", (SWEEP, "body"), "f", "cm s-1",
-                 "standard error of ballistic_velocity"),
-    VariableSpec("msd_slope", (SWEEP, "body"), "f", "cm2 s-1",
-                 "D hat of the fit MSD = D hat tau at long lags (the paper's D hat)"),
-    VariableSpec("msd_slope_error", (SWEEP, "body"), "f", "cm2 s-1",
-                 "standard error of msd_slope"),
-    VariableSpec("crossover_time", (SWEEP, "body"), "f", "s",
-                 "lag where the ballistic and diffusive fits meet"),
-    VariableSpec("confined_diffusion_coefficient", (SWEEP, "body"), "f", "cm2 s-1",
-                 "D of the confined-square MSD fit (MSD -> 4 D tau)"),
-    VariableSpec("ballistic_window_end", (SWEEP, "body"), "f", "s",
-                 "longest lag of the ballistic fit"),
-    VariableSpec("diffusive_window_start", (SWEEP, "body"), "f", "s",
-                 "shortest lag of the diffusive fit"),
-    VariableSpec("go_events", (SWEEP, "body"), "i", "1", "number of complete go phases"),
-    VariableSpec("stop_events", (SWEEP, "body"), "i", "1", "number of complete stop phases"),
-    VariableSpec("diffusion_coefficient", (SWEEP, "body"), "f", "cm2 s-1",
-                 "msd_slope / 4 (MSD -> 4 D tau convention)"),
-    VariableSpec("msd_slope_theory", (SWEEP, "body"), "f", "cm2 s-1",
-                 "theory's D hat = 2 v0_hat^2 <tau_g>"),
-    VariableSpec("ipr", (SWEEP, "realization", "time"), "f", "1",
-                 "shape index P / sqrt(A) of the membrane"),
-    VariableSpec("ipr_mean", (SWEEP,), "f", "1", "mean shape index"),
-    VariableSpec("gc_distance", (SWEEP,), "f", "cm", "mean distance between bot and cell GCs"),
-    VariableSpec("gc_distance_ratio", (SWEEP,), "f", "1", "gc_distance / R"),
-    VariableSpec("regime", (SWEEP,), "i", "1", "dynamical regime from gc_distance_ratio",
-                 {"flag_values": np.array(list(REGIMES.values()), dtype=np.int8),
-                  "flag_meanings": " ".join(REGIMES)}),
-)}
+ANALYSIS_VARIABLES: dict[str, VariableSpec] = {
+    v.name: v
+    for v in (
+        VariableSpec(
+            "msd",
+            (SWEEP, "body", "lag"),
+            "f",
+            "cm2",
+            "mean-squared displacement, pooled over realizations",
+        ),
+        VariableSpec(
+            "msd_sem",
+            (SWEEP, "body", "lag"),
+            "f",
+            "cm2",
+            "standard error of the MSD across realizations",
+        ),
+        VariableSpec("msd_pairs", (SWEEP, "body", "lag"), "f", "1", "number of displacement pairs"),
+        VariableSpec(
+            "msd_realization",
+            (SWEEP, "body", "realization", "lag"),
+            "f",
+            "cm2",
+            "mean-squared displacement of each realization",
+        ),
+        VariableSpec(
+            "msd_theory",
+            (SWEEP, "body", "lag"),
+            "f",
+            "cm2",
+            "run-and-tumble theory 2 v0_hat^2 (tau <tau_g> - <tau_g>^2 (1 - exp(-tau/<tau_g>)))",
+        ),
+        VariableSpec(
+            "speed",
+            (SWEEP, "body", "realization", "time"),
+            "f",
+            "cm s-1",
+            "speed, forward difference within a sampling segment",
+        ),
+        VariableSpec(
+            "stopgo_label",
+            (SWEEP, "body", "realization", "time"),
+            "i",
+            "1",
+            "stop/go label",
+            {"flag_values": STOPGO_FLAGS, "flag_meanings": STOPGO_MEANINGS},
+        ),
+        VariableSpec(
+            "go_duration",
+            (SWEEP, "body", "event"),
+            "f",
+            "s",
+            "duration of a complete go phase, (n - 1) dt",
+        ),
+        VariableSpec(
+            "stop_duration",
+            (SWEEP, "body", "event"),
+            "f",
+            "s",
+            "duration of a complete stop phase, (n - 1) dt",
+        ),
+        VariableSpec(
+            "go_pdf",
+            (SWEEP, "body", "scaled_duration"),
+            "f",
+            "1",
+            "probability density of go durations over their mean",
+        ),
+        VariableSpec(
+            "stop_pdf",
+            (SWEEP, "body", "scaled_duration"),
+            "f",
+            "1",
+            "probability density of stop durations over their mean",
+        ),
+        VariableSpec(
+            "mean_go_duration_shifted",
+            (SWEEP, "body", "threshold_shift"),
+            "f",
+            "s",
+            "mean go duration with the threshold shifted",
+        ),
+        VariableSpec(
+            "mean_stop_duration_shifted",
+            (SWEEP, "body", "threshold_shift"),
+            "f",
+            "s",
+            "mean stop duration with the threshold shifted",
+        ),
+        VariableSpec(
+            "mean_speed", (SWEEP, "body"), "f", "cm s-1", "mean speed (finest sampling segment)"
+        ),
+        VariableSpec(
+            "v0_hat",
+            (SWEEP, "body"),
+            "f",
+            "cm s-1",
+            "root mean square speed sqrt(mean^2 + variance), stops included (theory's v0 hat)",
+        ),
+        VariableSpec("mean_go_duration", (SWEEP, "body"), "f", "s", "mean go duration <tau_g>"),
+        VariableSpec("mean_stop_duration", (SWEEP, "body"), "f", "s", "mean stop duration <tau_s>"),
+        VariableSpec(
+            "go_fraction", (SWEEP, "body"), "f", "1", "fraction of labelled samples that are go"
+        ),
+        VariableSpec(
+            "go_ks_statistic",
+            (SWEEP, "body"),
+            "f",
+            "1",
+            "Kolmogorov-Smirnov distance of t/<t> (go) to exp(-t')",
+        ),
+        VariableSpec(
+            "go_ks_pvalue",
+            (SWEEP, "body"),
+            "f",
+            "1",
+            "p-value of go_ks_statistic (fully specified law)",
+        ),
+        VariableSpec(
+            "stop_ks_statistic",
+            (SWEEP, "body"),
+            "f",
+            "1",
+            "Kolmogorov-Smirnov distance of t/<t> (stop) to exp(-t')",
+        ),
+        VariableSpec(
+            "stop_ks_pvalue",
+            (SWEEP, "body"),
+            "f",
+            "1",
+            "p-value of stop_ks_statistic (fully specified law)",
+        ),
+        VariableSpec(
+            "ballistic_velocity",
+            (SWEEP, "body"),
+            "f",
+            "cm s-1",
+            "v of the fit MSD = v^2 tau^2 at short lags",
+        ),
+        VariableSpec(
+            "ballistic_velocity_error",
+            (SWEEP, "body"),
+            "f",
+            "cm s-1",
+            "standard error of ballistic_velocity",
+        ),
+        VariableSpec(
+            "msd_slope",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "D hat of the fit MSD = D hat tau at long lags (the paper's D hat)",
+        ),
+        VariableSpec(
+            "msd_slope_error", (SWEEP, "body"), "f", "cm2 s-1", "standard error of msd_slope"
+        ),
+        VariableSpec(
+            "crossover_time",
+            (SWEEP, "body"),
+            "f",
+            "s",
+            "lag where the ballistic and diffusive fits meet",
+        ),
+        VariableSpec(
+            "confined_diffusion_coefficient",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "D of the confined-square MSD fit (MSD -> 4 D tau)",
+        ),
+        VariableSpec(
+            "ballistic_window_end", (SWEEP, "body"), "f", "s", "longest lag of the ballistic fit"
+        ),
+        VariableSpec(
+            "diffusive_window_start", (SWEEP, "body"), "f", "s", "shortest lag of the diffusive fit"
+        ),
+        VariableSpec("go_events", (SWEEP, "body"), "i", "1", "number of complete go phases"),
+        VariableSpec("stop_events", (SWEEP, "body"), "i", "1", "number of complete stop phases"),
+        VariableSpec(
+            "diffusion_coefficient",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "msd_slope / 4 (MSD -> 4 D tau convention)",
+        ),
+        VariableSpec(
+            "msd_slope_theory",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "theory's D hat = 2 v0_hat^2 <tau_g>",
+        ),
+        VariableSpec(
+            "ipr",
+            (SWEEP, "realization", "time"),
+            "f",
+            "1",
+            "shape index P / sqrt(A) of the membrane",
+        ),
+        VariableSpec("ipr_mean", (SWEEP,), "f", "1", "mean shape index"),
+        VariableSpec("gc_distance", (SWEEP,), "f", "cm", "mean distance between bot and cell GCs"),
+        VariableSpec("gc_distance_ratio", (SWEEP,), "f", "1", "gc_distance / R"),
+        VariableSpec(
+            "regime",
+            (SWEEP,),
+            "i",
+            "1",
+            "dynamical regime from gc_distance_ratio",
+            {
+                "flag_values": np.array(list(REGIMES.values()), dtype=np.int8),
+                "flag_meanings": " ".join(REGIMES),
+            },
+        ),
+    )
+}
 
 #: Global attributes every file carries, and those a simulation adds.
 REQUIRED_ATTRS = ("Conventions", "title", "source", "softcell_version", "softcell_origin")
-SIMULATION_ATTRS = ("softcell_parameters", "softcell_parameter_units", "softcell_seed",
-                    "softcell_components")
+SIMULATION_ATTRS = (
+    "softcell_parameters",
+    "softcell_parameter_units",
+    "softcell_seed",
+    "softcell_components",
+)
 ORIGINS = ("simulation", "tracking")
 
 
@@ -204,11 +360,13 @@ def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
     var = ds[spec.name]
     found = []
     # Sweeps add leading dims (one per swept parameter); the schema's dims must come last.
-    if var.dims[len(var.dims) - len(spec.dims):] != spec.dims:
+    if var.dims[len(var.dims) - len(spec.dims) :] != spec.dims:
         found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(spec.dims)})")
     if var.dtype.kind not in (spec.kind, "u" if spec.kind == "i" else spec.kind):
-        found.append(f"{spec.name}: dtype {var.dtype}, expected "
-                     + ("floating point" if spec.kind == "f" else "integer"))
+        found.append(
+            f"{spec.name}: dtype {var.dtype}, expected "
+            + ("floating point" if spec.kind == "f" else "integer")
+        )
     for attr in ("units", "long_name"):
         if attr not in var.attrs:
             found.append(f"{spec.name}: attribute {attr!r} missing")
@@ -238,18 +396,34 @@ def validate(ds: xr.Dataset) -> xr.Dataset:
 def global_attrs(origin: str, title: str, source: str, **extra: Any) -> dict[str, Any]:
     """The global attributes every softcell file starts with (no timestamps: same inputs,
     same bytes)."""
-    return {"Conventions": CONVENTIONS, "title": title, "source": source,
-            "softcell_version": __version__, "softcell_origin": origin, **extra}
+    return {
+        "Conventions": CONVENTIONS,
+        "title": title,
+        "source": source,
+        "softcell_version": __version__,
+        "softcell_origin": origin,
+        **extra,
+    }
 
 
-def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
-                       membrane_x: np.ndarray, membrane_y: np.ndarray,
-                       bot_x: np.ndarray, bot_y: np.ndarray, bot_angle: np.ndarray,
-                       bot_phase: np.ndarray, parameters: Any, seed: int,
-                       components: Mapping[str, Any],
-                       cell_x: np.ndarray | None = None, cell_y: np.ndarray | None = None,
-                       extra_attrs: Mapping[str, Any] | None = None,
-                       scalar_coords: Sequence[str] = ("radius",)) -> xr.Dataset:
+def simulation_dataset(
+    time: np.ndarray,
+    realization: np.ndarray,
+    *,
+    membrane_x: np.ndarray,
+    membrane_y: np.ndarray,
+    bot_x: np.ndarray,
+    bot_y: np.ndarray,
+    bot_angle: np.ndarray,
+    bot_phase: np.ndarray,
+    parameters: Any,
+    seed: int,
+    components: Mapping[str, Any],
+    cell_x: np.ndarray | None = None,
+    cell_y: np.ndarray | None = None,
+    extra_attrs: Mapping[str, Any] | None = None,
+    scalar_coords: Sequence[str] = ("radius",),
+) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
     Parameters
@@ -280,24 +454,40 @@ def simulation_dataset(time: np.ndarray, realization: np.ndarray, *,
         cell_x = membrane_x.mean(axis=-1)
     if cell_y is None:
         cell_y = membrane_y.mean(axis=-1)
-    arrays = {"membrane_x": membrane_x, "membrane_y": membrane_y, "cell_x": cell_x,
-              "cell_y": cell_y, "bot_x": bot_x, "bot_y": bot_y, "bot_angle": bot_angle,
-              "bot_phase": np.asarray(bot_phase, dtype=np.int8)}
-    data_vars = {name: (VARIABLES[name].dims, np.asarray(arr), VARIABLES[name].cf_attrs())
-                 for name, arr in arrays.items()}
+    arrays = {
+        "membrane_x": membrane_x,
+        "membrane_y": membrane_y,
+        "cell_x": cell_x,
+        "cell_y": cell_y,
+        "bot_x": bot_x,
+        "bot_y": bot_y,
+        "bot_angle": bot_angle,
+        "bot_phase": np.asarray(bot_phase, dtype=np.int8),
+    }
+    data_vars = {
+        name: (VARIABLES[name].dims, np.asarray(arr), VARIABLES[name].cf_attrs())
+        for name, arr in arrays.items()
+    }
     n_nodes = np.shape(membrane_x)[-1]
     coords = {
-        "realization": ("realization", np.asarray(realization, dtype=np.int64),
-                        COORDINATES["realization"].cf_attrs()),
+        "realization": (
+            "realization",
+            np.asarray(realization, dtype=np.int64),
+            COORDINATES["realization"].cf_attrs(),
+        ),
         "time": ("time", np.asarray(time, dtype=np.float64), COORDINATES["time"].cf_attrs()),
         "node": ("node", np.arange(n_nodes, dtype=np.int64), COORDINATES["node"].cf_attrs()),
     }
     for name in dict.fromkeys(scalar_coords):
         spec = parameters.specs[name]
         coords[name] = ((), parameters[name], {"units": spec.unit, "long_name": spec.long_name})
-    attrs = global_attrs("simulation", "soft robotic cell simulation",
-                         f"softcell {__version__} simulation",
-                         softcell_seed=int(seed),
-                         softcell_components=json.dumps(dict(components), sort_keys=True),
-                         **parameters.to_attrs(), **dict(extra_attrs or {}))
+    attrs = global_attrs(
+        "simulation",
+        "soft robotic cell simulation",
+        f"softcell {__version__} simulation",
+        softcell_seed=int(seed),
+        softcell_components=json.dumps(dict(components), sort_keys=True),
+        **parameters.to_attrs(),
+        **dict(extra_attrs or {}),
+    )
     return validate(xr.Dataset(data_vars, coords, attrs))

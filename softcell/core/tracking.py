@@ -49,26 +49,35 @@ class Frame:
     x0: float = 0.0
     y0: float = 0.0
 
-    def to_pixels(self, x: np.ndarray, y: np.ndarray, z: float = 0.0
-                  ) -> tuple[np.ndarray, np.ndarray]:
+    def to_pixels(
+        self, x: np.ndarray, y: np.ndarray, z: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Column and row (px, pixel centers at integers) of world points (cm) (``z`` must
         be 0: see :meth:`to_world`)."""
         _flat(z)
-        return ((np.asarray(x) - self.x0) * self.px_per_cm - 0.5,
-                self.height - (np.asarray(y) - self.y0) * self.px_per_cm - 0.5)
+        return (
+            (np.asarray(x) - self.x0) * self.px_per_cm - 0.5,
+            self.height - (np.asarray(y) - self.y0) * self.px_per_cm - 0.5,
+        )
 
-    def to_world(self, u: np.ndarray, v: np.ndarray, z: float = 0.0
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def to_world(
+        self, u: np.ndarray, v: np.ndarray, z: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """World points (cm) of column and row coordinates (px); a linear frame has no
         parallax to correct, so ``z`` (cm) must be 0."""
         _flat(z)
-        return (self.x0 + (np.asarray(u) + 0.5) / self.px_per_cm,
-                self.y0 + (self.height - np.asarray(v) - 0.5) / self.px_per_cm)
+        return (
+            self.x0 + (np.asarray(u) + 0.5) / self.px_per_cm,
+            self.y0 + (self.height - np.asarray(v) - 0.5) / self.px_per_cm,
+        )
+
 
 def _flat(z: float) -> None:
     if z:
-        raise ValueError(f"an object height of {z:g} cm needs a camera model (a plate "
-                         "calibration), not a linear frame")
+        raise ValueError(
+            f"an object height of {z:g} cm needs a camera model (a plate "
+            "calibration), not a linear frame"
+        )
 
 
 @dataclass
@@ -85,19 +94,23 @@ class TrackResult:
     marked: list[bool] = field(default_factory=list)
     reasons: list[str] = field(default_factory=list)
 
+
 def _arclength_resample(points: np.ndarray, count: int) -> np.ndarray:
     """``count`` points equally spaced by arclength along a closed polyline [K, 2]."""
     closed = np.vstack([points, points[:1]])
     seg = np.hypot(*np.diff(closed, axis=0).T)
     s = np.concatenate([[0.0], np.cumsum(seg)])
     target = np.arange(count) * s[-1] / count
-    return np.stack([np.interp(target, s, closed[:, 0]), np.interp(target, s, closed[:, 1])],
-                    axis=1)
+    return np.stack(
+        [np.interp(target, s, closed[:, 0]), np.interp(target, s, closed[:, 1])], axis=1
+    )
+
 
 def _start_at_angle_zero(points: np.ndarray, center: np.ndarray) -> np.ndarray:
     """Roll a closed curve (world frame, counter-clockwise) to start nearest angle 0."""
     angles = np.arctan2(points[:, 1] - center[1], points[:, 0] - center[0])
     return np.roll(points, -int(np.argmin(np.abs(angles))), axis=0)
+
 
 #: Defaults of the adaptive detection (each can be set): a pixel is paper when its redness
 #: (R - max(G, B)) / R exceeds RING_FRACTION of the frame's paper redness, and bot when its
@@ -140,13 +153,22 @@ class Tracker:
         A pixel is bot when darker than this fraction of the plate inside the ring.
     """
 
-    def __init__(self, frame, nodes: int = 64, *, ring_z: float = 0.0, bot_z: float = 0.0,
-                 radius: float | None = None, ring_color: str = "red",
-                 ring_threshold: float | None = None,
-                 dark_fraction: float = DARK_FRACTION) -> None:
+    def __init__(
+        self,
+        frame,
+        nodes: int = 64,
+        *,
+        ring_z: float = 0.0,
+        bot_z: float = 0.0,
+        radius: float | None = None,
+        ring_color: str = "red",
+        ring_threshold: float | None = None,
+        dark_fraction: float = DARK_FRACTION,
+    ) -> None:
         if ring_color not in RING_COLORS:
-            raise ValueError(f"ring colour {ring_color!r} is not known: one of "
-                             f"{', '.join(RING_COLORS)}")
+            raise ValueError(
+                f"ring colour {ring_color!r} is not known: one of {', '.join(RING_COLORS)}"
+            )
         self.ring_color = ring_color
         self.frame = frame
         self.nodes = nodes
@@ -164,8 +186,9 @@ class Tracker:
         mask = getattr(frame, "plate_mask", None)
         self.search_mask = mask() if mask is not None else None
 
-    def track(self, image: np.ndarray) -> tuple[int, tuple[float, float], np.ndarray,
-                                                tuple[float, float, float]]:
+    def track(
+        self, image: np.ndarray
+    ) -> tuple[int, tuple[float, float], np.ndarray, tuple[float, float, float]]:
         """Track one BGR uint8 frame: (flag, cell GC (cm), membrane nodes [nodes, 2] (cm),
         bot (x cm, y cm, heading rad)); NaN where detection failed, and :attr:`reason` says
         why.
@@ -176,9 +199,13 @@ class Tracker:
         if self.window is not None:
             x0, y0, x1, y1 = self.window
             result, box = self._detect(image[y0:y1, x0:x1], x0, y0)
-            inside = box is not None and (box[0] > x0 or x0 == 0) and (
-                box[1] > y0 or y0 == 0) and (box[2] < x1 or x1 == width) and (
-                box[3] < y1 or y1 == height)
+            inside = (
+                box is not None
+                and (box[0] > x0 or x0 == 0)
+                and (box[1] > y0 or y0 == 0)
+                and (box[2] < x1 or x1 == width)
+                and (box[3] < y1 or y1 == height)
+            )
             if inside:
                 self._move_window(box, width, height)
                 return result
@@ -191,8 +218,12 @@ class Tracker:
     def _move_window(self, box: tuple[int, int, int, int], width: int, height: int) -> None:
         x0, y0, x1, y1 = box
         margin = max(40, (x1 - x0) // 4, (y1 - y0) // 4)
-        self.window = (max(x0 - margin, 0), max(y0 - margin, 0), min(x1 + margin, width),
-                       min(y1 + margin, height))
+        self.window = (
+            max(x0 - margin, 0),
+            max(y0 - margin, 0),
+            min(x1 + margin, width),
+            min(y1 + margin, height),
+        )
 
     @property
     def expected_perimeter(self) -> float | None:
@@ -204,9 +235,12 @@ class Tracker:
         """Paper mask of a BGR image (within ``region``, a mask, if given): redness above
         this frame's threshold."""
         b, g, r = (c.astype(np.float32) for c in cv2.split(cv2.medianBlur(image, 3)))
-        main, rest = {"red": (r, np.maximum(g, b)), "green": (g, np.maximum(r, b)),
-                      "blue": (b, np.maximum(r, g)),
-                      "yellow": (np.minimum(r, g), b)}[self.ring_color]
+        main, rest = {
+            "red": (r, np.maximum(g, b)),
+            "green": (g, np.maximum(r, b)),
+            "blue": (b, np.maximum(r, g)),
+            "yellow": (np.minimum(r, g), b),
+        }[self.ring_color]
         bright = main >= 0.25 * float(np.percentile(main, 90))  # dark pixels have no colour
         redness = np.where(bright, (main - rest) / np.maximum(main, 1.0), 0.0)
         if region is not None:
@@ -223,8 +257,9 @@ class Tracker:
         contours, hierarchy = cv2.findContours(band, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
         if not contours:
             return None, "no paper seen"
-        areas = [cv2.contourArea(c) if hierarchy[0][k][3] < 0 else -1.0
-                 for k, c in enumerate(contours)]
+        areas = [
+            cv2.contourArea(c) if hierarchy[0][k][3] < 0 else -1.0 for k, c in enumerate(contours)
+        ]
         outer_k = int(np.argmax(areas))
         holes = [k for k in range(len(contours)) if hierarchy[0][k][3] == outer_k]
         if areas[outer_k] <= 0 or not holes:
@@ -238,12 +273,14 @@ class Tracker:
         edges = []
         for edge in (outer, inner):
             world = np.stack(self.frame.to_world(edge[:, 0], edge[:, 1], self.ring_z), axis=1)
-            area = 0.5 * np.sum(world[:, 0] * np.roll(world[:, 1], -1)
-                                - np.roll(world[:, 0], -1) * world[:, 1])
+            area = 0.5 * np.sum(
+                world[:, 0] * np.roll(world[:, 1], -1) - np.roll(world[:, 0], -1) * world[:, 1]
+            )
             if area < 0:
                 world = world[::-1]
-            edges.append(_start_at_angle_zero(_arclength_resample(world, MIDLINE_POINTS),
-                                              world.mean(axis=0)))
+            edges.append(
+                _start_at_angle_zero(_arclength_resample(world, MIDLINE_POINTS), world.mean(axis=0))
+            )
         return 0.5 * (edges[0] + edges[1])
 
     def _fitted_ring(self, band: np.ndarray, offset: np.ndarray):
@@ -252,8 +289,7 @@ class Tracker:
         :data:`PRIOR_MODES` Fourier modes about the GC, its deformations penalized and, when
         the radius is known, its mean radius held near it): the fine curve
         [MIDLINE_POINTS, 2] (cm), or None and a reason."""
-        count, labels, stats, centroids = cv2.connectedComponentsWithStats(band,
-                                                                          connectivity=8)
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(band, connectivity=8)
         if count <= 1:
             return None, "no paper seen"
         areas = stats[1:, cv2.CC_STAT_AREA]
@@ -262,14 +298,18 @@ class Tracker:
         # The ring's pieces: no specks, and (the paper's colour fringes at far edges are
         # not the ring) near the largest piece, or near the last GC.
         keep = np.nonzero(areas >= max(3, 0.05 * areas.max()))[0] + 1
-        cx, cy = self.frame.to_world(centroids[keep, 0] + offset[0],
-                                     centroids[keep, 1] + offset[1], self.ring_z)
+        cx, cy = self.frame.to_world(
+            centroids[keep, 0] + offset[0], centroids[keep, 1] + offset[1], self.ring_z
+        )
         if self.gc is not None and radius is not None:
             close = np.hypot(cx - self.gc[0], cy - self.gc[1]) < 1.5 * radius
         else:
             big = int(np.argmax(areas[keep - 1]))
-            reach = 2.5 * radius if radius is not None else 0.5 * np.hypot(*band.shape) / \
-                max(self.frame.px_per_cm, 1e-9)
+            reach = (
+                2.5 * radius
+                if radius is not None
+                else 0.5 * np.hypot(*band.shape) / max(self.frame.px_per_cm, 1e-9)
+            )
             close = np.hypot(cx - cx[big], cy - cy[big]) < reach
         vv, uu = np.nonzero(np.isin(labels, keep[close]))
         if uu.size < 50:
@@ -299,8 +339,9 @@ class Tracker:
             groups = np.split(r[order], np.cumsum(counts)[:-1])
             phi = (np.nonzero(filled)[0] + 0.5) / ANGLE_BINS * 2 * np.pi - np.pi
             radii = np.array([np.median(g) for g in groups if g.size])
-            basis = np.column_stack([np.ones_like(phi), np.cos(np.outer(phi, modes)),
-                                     np.sin(np.outer(phi, modes))])
+            basis = np.column_stack(
+                [np.ones_like(phi), np.cos(np.outer(phi, modes)), np.sin(np.outer(phi, modes))]
+            )
             lhs = basis.T @ basis + np.diag(stiffness * phi.size)
             rhs = basis.T @ radii
             if radius is not None:  # the known length: mean radius near R
@@ -309,8 +350,16 @@ class Tracker:
                 rhs[0] += weight * radius
             coef = np.linalg.solve(lhs, rhs)
             theta = np.linspace(-np.pi, np.pi, MIDLINE_POINTS, endpoint=False)
-            full = np.column_stack([np.ones_like(theta), np.cos(np.outer(theta, modes)),
-                                    np.sin(np.outer(theta, modes))]) @ coef
+            full = (
+                np.column_stack(
+                    [
+                        np.ones_like(theta),
+                        np.cos(np.outer(theta, modes)),
+                        np.sin(np.outer(theta, modes)),
+                    ]
+                )
+                @ coef
+            )
             curve = center + full[:, None] * np.stack([np.cos(theta), np.sin(theta)], axis=1)
             _, _, gx, gy = polygon_area_perimeter_centroid(curve[:, 0], curve[:, 1])
             center = np.array([gx, gy])
@@ -332,7 +381,7 @@ class Tracker:
         offset = np.array([ox, oy])
         region = None
         if self.search_mask is not None:  # the plate: paper on the floor is not the ring
-            region = self.search_mask[oy:oy + image.shape[0], ox:ox + image.shape[1]]
+            region = self.search_mask[oy : oy + image.shape[0], ox : ox + image.shape[1]]
         band = self._paper(image, region)
         edges, self.reason = self._closed_ring(band, offset)
         fine = None
@@ -373,8 +422,7 @@ class Tracker:
         return (flag, (float(gc[0]), float(gc[1])), midline, bot), box
 
     @staticmethod
-    def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, axis: float
-                     ) -> float | None:
+    def _mark_offset(mark: np.ndarray, m: dict, cu: float, cv_: float, axis: float) -> float | None:
         """Offset of a head mark from the bot's center along its axis (px, signed), or None
         unless the light region inside the bot looks like the mark: small,
         on the axis, between the center and an end (gaps where the bot touches the membrane
@@ -385,22 +433,25 @@ class Tracker:
         du, dv = mm["m10"] / mm["m00"] - cu, mm["m01"] / mm["m00"] - cv_
         along = np.cos(axis) * du + np.sin(axis) * dv
         across = -np.sin(axis) * du + np.cos(axis) * dv
-        spread = np.linalg.eigvalsh(np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]])
-                                    / m["m00"])
+        spread = np.linalg.eigvalsh(
+            np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]]) / m["m00"]
+        )
         semi_minor, semi_major = 2 * np.sqrt(np.maximum(spread, 0.0))
-        if not (0.3 * semi_major <= abs(along) <= 0.9 * semi_major
-                and abs(across) <= 0.35 * semi_minor):
+        if not (
+            0.3 * semi_major <= abs(along) <= 0.9 * semi_major and abs(across) <= 0.35 * semi_minor
+        ):
             return None
         return float(along)
 
-    def _bot(self, image: np.ndarray, inside: np.ndarray, band: np.ndarray, ox: int,
-             oy: int) -> tuple[float, float, float]:
+    def _bot(
+        self, image: np.ndarray, inside: np.ndarray, band: np.ndarray, ox: int, oy: int
+    ) -> tuple[float, float, float]:
         x, y, w, h = cv2.boundingRect(inside)
         if w == 0 or h == 0:
             self.reason = "bot: the ring has no inside"
             return (np.nan, np.nan, np.nan)
-        roi = cv2.cvtColor(image[y:y + h, x:x + w], cv2.COLOR_BGR2GRAY)
-        mask_in = inside[y:y + h, x:x + w]
+        roi = cv2.cvtColor(image[y : y + h, x : x + w], cv2.COLOR_BGR2GRAY)
+        mask_in = inside[y : y + h, x : x + w]
         plate = float(np.median(roi[mask_in > 0]))  # the bot covers a small part of it
         dark = ((roi < self.dark_fraction * plate) & (mask_in > 0)).astype(np.uint8)
         contours, _ = cv2.findContours(dark, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
@@ -421,7 +472,7 @@ class Tracker:
         axis = moment_axis
         # Where the wall hides part of the bot, its outline there is the wall's: the ellipse
         # through the rest of its outline is the bot's.
-        near_wall = cv2.dilate(band[y:y + h, x:x + w], np.ones((5, 5), np.uint8))
+        near_wall = cv2.dilate(band[y : y + h, x : x + w], np.ones((5, 5), np.uint8))
         hull, _ = cv2.findContours(filled, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         outline = max(hull, key=len)[:, 0, :]
         free = outline[near_wall[outline[:, 1], outline[:, 0]] == 0]
@@ -470,8 +521,9 @@ def _orient_by_motion(bot: np.ndarray, marked: np.ndarray) -> None:
         bot[:first, 2] += np.pi
 
 
-def tracked_dataset(result: TrackResult, *, nodes: int, radius: float | None,
-                    attrs: dict) -> xr.Dataset:
+def tracked_dataset(
+    result: TrackResult, *, nodes: int, radius: float | None, attrs: dict
+) -> xr.Dataset:
     """The simulation schema's Dataset (origin ``tracking``) of per-frame results.
 
     ``radius`` (cm) is stored as a parameter for the analysis; None estimates it as the mean
@@ -489,24 +541,41 @@ def tracked_dataset(result: TrackResult, *, nodes: int, radius: float | None,
         perimeter = np.hypot(*np.diff(closed, axis=1).transpose(2, 0, 1)).sum(axis=1)
         radius = float(np.nanmean(perimeter) / (2 * np.pi))
     summary = {name: int(np.sum(flags == value)) for name, value in FLAGS.items()}
-    data = {"membrane_x": membrane[None, :, :, 0], "membrane_y": membrane[None, :, :, 1],
-            "cell_x": cell[None, :, 0], "cell_y": cell[None, :, 1],
-            "bot_x": bot[None, :, 0], "bot_y": bot[None, :, 1],
-            "bot_angle": bot[None, :, 2],
-            "bot_phase": np.full((1, len(flags)), -1, dtype=np.int8)}
-    data_vars = {name: (VARIABLES[name].dims, arr, VARIABLES[name].cf_attrs())
-                 for name, arr in data.items()}
-    data_vars["tracking_flag"] = (("realization", "time"), flags[None], {
-        "units": "1", "long_name": "tracking outcome per frame",
-        "flag_values": np.array(list(FLAGS.values()), dtype=np.int8),
-        "flag_meanings": " ".join(FLAGS)})
-    coords = {"realization": ("realization", np.array([0]),
-                              COORDINATES["realization"].cf_attrs()),
-              "time": ("time", np.array(result.times), COORDINATES["time"].cf_attrs()),
-              "node": ("node", np.arange(nodes), COORDINATES["node"].cf_attrs())}
-    attrs = global_attrs("tracking", "soft robotic cell tracked from video",
-                         f"softcell {__version__} tracker", **attrs,
-                         softcell_tracking_summary=json.dumps(summary),
-                         softcell_parameters=json.dumps({"radius": radius}),
-                         softcell_parameter_units=json.dumps({"radius": "cm"}))
+    data = {
+        "membrane_x": membrane[None, :, :, 0],
+        "membrane_y": membrane[None, :, :, 1],
+        "cell_x": cell[None, :, 0],
+        "cell_y": cell[None, :, 1],
+        "bot_x": bot[None, :, 0],
+        "bot_y": bot[None, :, 1],
+        "bot_angle": bot[None, :, 2],
+        "bot_phase": np.full((1, len(flags)), -1, dtype=np.int8),
+    }
+    data_vars = {
+        name: (VARIABLES[name].dims, arr, VARIABLES[name].cf_attrs()) for name, arr in data.items()
+    }
+    data_vars["tracking_flag"] = (
+        ("realization", "time"),
+        flags[None],
+        {
+            "units": "1",
+            "long_name": "tracking outcome per frame",
+            "flag_values": np.array(list(FLAGS.values()), dtype=np.int8),
+            "flag_meanings": " ".join(FLAGS),
+        },
+    )
+    coords = {
+        "realization": ("realization", np.array([0]), COORDINATES["realization"].cf_attrs()),
+        "time": ("time", np.array(result.times), COORDINATES["time"].cf_attrs()),
+        "node": ("node", np.arange(nodes), COORDINATES["node"].cf_attrs()),
+    }
+    attrs = global_attrs(
+        "tracking",
+        "soft robotic cell tracked from video",
+        f"softcell {__version__} tracker",
+        **attrs,
+        softcell_tracking_summary=json.dumps(summary),
+        softcell_parameters=json.dumps({"radius": radius}),
+        softcell_parameter_units=json.dumps({"radius": "cm"}),
+    )
     return validate(xr.Dataset(data_vars, coords, attrs))

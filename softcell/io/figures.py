@@ -61,12 +61,10 @@ def _regime_at(analysis: xr.Dataset, i: int) -> int:
 def _shade_regimes(ax, analysis: xr.Dataset) -> None:
     """Shade each radius's slot of an R axis with its regime's colour."""
     radii = analysis["radius"].values
-    edges = np.concatenate([[radii[0] - 0.5], 0.5 * (radii[1:] + radii[:-1]),
-                            [radii[-1] + 0.5]])
+    edges = np.concatenate([[radii[0] - 0.5], 0.5 * (radii[1:] + radii[:-1]), [radii[-1] + 0.5]])
     for k, regime in enumerate(analysis["regime"].values):
         if int(regime) in REGIME_COLORS:
-            ax.axvspan(edges[k], edges[k + 1], color=REGIME_COLORS[int(regime)], alpha=0.35,
-                       lw=0)
+            ax.axvspan(edges[k], edges[k + 1], color=REGIME_COLORS[int(regime)], alpha=0.35, lw=0)
     ax.set_xlim(edges[0], edges[-1])
 
 
@@ -100,12 +98,22 @@ def _trajectory(ax, simulations: xr.Dataset, radius: float, span: float, analysi
     t0 = t[0] + float(json_option(analysis, "discard"))
     use = (t >= t0) & (t <= t0 + span) & np.isfinite(np.asarray(sel["cell_x"].values))
     for body, color in (("bot", "0.35"), ("cell", "C3")):
-        ax.plot(np.asarray(sel[f"{body}_x"].values)[use], np.asarray(sel[f"{body}_y"].values)[use],
-                color=color, lw=0.8, label=f"{body} GC" if body == "cell" else "bot")
+        ax.plot(
+            np.asarray(sel[f"{body}_x"].values)[use],
+            np.asarray(sel[f"{body}_y"].values)[use],
+            color=color,
+            lw=0.8,
+            label=f"{body} GC" if body == "cell" else "bot",
+        )
     first = int(np.argmax(use))
-    ax.plot(np.append(sel["membrane_x"].values[first], sel["membrane_x"].values[first][0]),
-            np.append(sel["membrane_y"].values[first], sel["membrane_y"].values[first][0]),
-            color="C3", lw=0.6, ls=":", label=f"membrane at t = {t[first]:.0f} s")
+    ax.plot(
+        np.append(sel["membrane_x"].values[first], sel["membrane_x"].values[first][0]),
+        np.append(sel["membrane_y"].values[first], sel["membrane_y"].values[first][0]),
+        color="C3",
+        lw=0.6,
+        ls=":",
+        label=f"membrane at t = {t[first]:.0f} s",
+    )
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (cm)")
     ax.set_ylabel("y (cm)")
@@ -118,14 +126,15 @@ def json_option(analysis: xr.Dataset, name: str):
     return json.loads(analysis.attrs["softcell_analysis_options"])[name]
 
 
-def _speed_series(ax, analysis: xr.Dataset, i: int, span: float, bodies=("bot", "cell"),
-                  shade: bool = False) -> None:
+def _speed_series(
+    ax, analysis: xr.Dataset, i: int, span: float, bodies=("bot", "cell"), shade: bool = False
+) -> None:
     point = analysis.isel(radius=i, realization=0)
     t = np.asarray(analysis["time"].values)
     dt = np.diff(t)
     fine = np.flatnonzero(np.isclose(dt, dt.min()))
     use = np.zeros(t.size, dtype=bool)
-    use[fine[0]: fine[0] + int(round(span / dt.min())) + 1] = True
+    use[fine[0] : fine[0] + int(round(span / dt.min())) + 1] = True
     for body, color in zip(bodies, ("0.35", "C3"), strict=False):
         s = np.asarray(point["speed"].sel(body=body).values)
         ax.plot(t[use], s[use], color=color, lw=0.7, label=f"{body}")
@@ -141,16 +150,22 @@ def _speed_series(ax, analysis: xr.Dataset, i: int, span: float, bodies=("bot", 
     ax.set_xlabel("t (s)")
     ax.set_ylabel("|v| (cm/s)")
     ax.legend(fontsize=7, loc="upper right")
-    ax.text(0.02, 0.9, f"R = {float(analysis['radius'][i]):g} cm", transform=ax.transAxes,
-            fontsize=8)
+    ax.text(
+        0.02, 0.9, f"R = {float(analysis['radius'][i]):g} cm", transform=ax.transAxes, fontsize=8
+    )
 
 
 def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
     radii = analysis["radius"].values
     lag = analysis["lag"].values
     for r, color in zip(radii, _radius_colors(radii), strict=True):
-        ax.plot(lag, analysis["msd"].sel(radius=r, body=body).values, color=color, lw=1,
-                label=f"R = {r:g} cm")
+        ax.plot(
+            lag,
+            analysis["msd"].sel(radius=r, body=body).values,
+            color=color,
+            lw=1,
+            label=f"R = {r:g} cm",
+        )
     _msd_axes(ax)
     ax.legend(fontsize=6, ncol=2)
 
@@ -158,8 +173,13 @@ def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
 def _collapse(ax, analysis: xr.Dataset) -> str:
     metric = analysis["collapse_metric"].values
     if not np.isfinite(metric).any():
-        ax.text(0.5, 0.5, "fewer than two decoupled radii:\nno collapse", ha="center",
-                transform=ax.transAxes)
+        ax.text(
+            0.5,
+            0.5,
+            "fewer than two decoupled radii:\nno collapse",
+            ha="center",
+            transform=ax.transAxes,
+        )
         return "none"
     k = int(np.nanargmin(metric))
     a = float(analysis["collapse_msd_exponent"][k])
@@ -169,8 +189,13 @@ def _collapse(ax, analysis: xr.Dataset) -> str:
     for r, color in zip(radii, _radius_colors(radii), strict=True):
         end = float(analysis["diffusive_window_start"].sel(radius=r, body="cell"))
         use = lag <= end
-        ax.plot(lag[use] * r**b, analysis["msd"].sel(radius=r, body="cell").values[use] * r**a,
-                color=color, lw=1, label=f"R = {r:g} cm")
+        ax.plot(
+            lag[use] * r**b,
+            analysis["msd"].sel(radius=r, body="cell").values[use] * r**a,
+            color=color,
+            lw=1,
+            label=f"R = {r:g} cm",
+        )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(rf"$\tau\,R^{{{b:+g}}}$ (s cm$^{{{b:+g}}}$)")
@@ -191,8 +216,13 @@ def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
         _label(ax_v, "cd"[col])
         if i is None:
             for ax in (ax_t, ax_v):
-                ax.text(0.5, 0.5, f"R = {radius:g} cm not simulated", ha="center",
-                        transform=ax.transAxes)
+                ax.text(
+                    0.5,
+                    0.5,
+                    f"R = {radius:g} cm not simulated",
+                    ha="center",
+                    transform=ax.transAxes,
+                )
             continue
         _background(ax_t, _regime_at(analysis, i))
         _background(ax_v, _regime_at(analysis, i))
@@ -205,8 +235,9 @@ def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
     return fig
 
 
-def _pdf_panel(ax, analysis: xr.Dataset, kind: str, radii: Sequence[float],
-               tracked: xr.Dataset | None = None) -> None:
+def _pdf_panel(
+    ax, analysis: xr.Dataset, kind: str, radii: Sequence[float], tracked: xr.Dataset | None = None
+) -> None:
     x = analysis["scaled_duration"].values
     colors = _radius_colors(np.asarray(radii))
     for r, color in zip(radii, colors, strict=True):
@@ -214,8 +245,14 @@ def _pdf_panel(ax, analysis: xr.Dataset, kind: str, radii: Sequence[float],
         ax.plot(x, np.where(y > 0, y, np.nan), "o", ms=3, color=color, label=f"R = {r:g} cm")
     if tracked is not None:
         y = tracked[f"{kind}_pdf"].sel(body="cell").values
-        ax.plot(tracked["scaled_duration"].values, np.where(y > 0, y, np.nan), "^", ms=4,
-                color=EXP_COLOR, label="tracked video")
+        ax.plot(
+            tracked["scaled_duration"].values,
+            np.where(y > 0, y, np.nan),
+            "^",
+            ms=4,
+            color=EXP_COLOR,
+            label="tracked video",
+        )
     grid = np.linspace(0, max(6.0, float(x.max())), 200)
     ax.plot(grid, np.exp(-grid), "k--", lw=1, label=r"$e^{-t'}$")
     ax.set_yscale("log")
@@ -228,22 +265,36 @@ def _pdf_panel(ax, analysis: xr.Dataset, kind: str, radii: Sequence[float],
 
 
 def _tracked_radius(tracked: xr.Dataset) -> float:
-    return float(json.loads(tracked.attrs.get("softcell_parameters", "{}")).get("radius",
-                                                                                 np.nan))
+    return float(json.loads(tracked.attrs.get("softcell_parameters", "{}")).get("radius", np.nan))
 
 
-def _against_radius(ax, analysis: xr.Dataset, name: str, label: str,
-                    tracked: xr.Dataset | None = None, body: str = "cell",
-                    error: str | None = None, marker: str = "o", color: str = SIM_COLOR,
-                    legend: str = "simulations") -> None:
+def _against_radius(
+    ax,
+    analysis: xr.Dataset,
+    name: str,
+    label: str,
+    tracked: xr.Dataset | None = None,
+    body: str = "cell",
+    error: str | None = None,
+    marker: str = "o",
+    color: str = SIM_COLOR,
+    legend: str = "simulations",
+) -> None:
     radii = analysis["radius"].values
     y = analysis[name].sel(body=body).values
     yerr = analysis[error].sel(body=body).values if error else None
-    ax.errorbar(radii, y, yerr=yerr, fmt=marker, color=color, mfc="none", ms=6, capsize=2,
-                label=legend)
+    ax.errorbar(
+        radii, y, yerr=yerr, fmt=marker, color=color, mfc="none", ms=6, capsize=2, label=legend
+    )
     if tracked is not None:
-        ax.plot([_tracked_radius(tracked)], [float(tracked[name].sel(body=body))], "^",
-                color=EXP_COLOR, ms=7, label="tracked video")
+        ax.plot(
+            [_tracked_radius(tracked)],
+            [float(tracked[name].sel(body=body))],
+            "^",
+            color=EXP_COLOR,
+            ms=7,
+            label="tracked video",
+        )
     ax.margins(y=0.12)
     ax.set_xlabel("R (cm)")
     ax.set_ylabel(label)
@@ -267,8 +318,9 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
         _label(ax, "b")
         _pdf_panel(ax, analysis, kind, radii, tracked)
     sub = grid[1, 2].subgridspec(2, 1)
-    for row, (name, symbol) in enumerate((("mean_go_duration", r"\tau_\mathrm{g}"),
-                                          ("mean_stop_duration", r"\tau_\mathrm{s}"))):
+    for row, (name, symbol) in enumerate(
+        (("mean_go_duration", r"\tau_\mathrm{g}"), ("mean_stop_duration", r"\tau_\mathrm{s}"))
+    ):
         ax = fig.add_subplot(sub[row])
         if row == 0:
             _label(ax, "c")
@@ -284,10 +336,25 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     fig = _figure(9, 4)
     ax_a, ax_b = fig.subplots(1, 2)
     for ax, letter, fit, error, theory, label, hat in (
-            (ax_a, "a", "ballistic_velocity", "ballistic_velocity_error", "v0_hat",
-             "velocity (cm/s)", r"$\hat v_0^\mathrm{sim}$"),
-            (ax_b, "b", "msd_slope", "msd_slope_error", "msd_slope_theory",
-             r"$\hat D$ (cm$^2$/s)", r"$\hat D^\mathrm{sim}$")):
+        (
+            ax_a,
+            "a",
+            "ballistic_velocity",
+            "ballistic_velocity_error",
+            "v0_hat",
+            "velocity (cm/s)",
+            r"$\hat v_0^\mathrm{sim}$",
+        ),
+        (
+            ax_b,
+            "b",
+            "msd_slope",
+            "msd_slope_error",
+            "msd_slope_theory",
+            r"$\hat D$ (cm$^2$/s)",
+            r"$\hat D^\mathrm{sim}$",
+        ),
+    ):
         _label(ax, letter)
         _shade_regimes(ax, analysis)
         _against_radius(ax, analysis, fit, label, None, error=error, legend="fit of the MSD")
@@ -295,8 +362,14 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
         if tracked is not None:
             r = _tracked_radius(tracked)
             for name, marker in ((fit, "^"), (theory, "v")):
-                ax.plot([r], [float(tracked[name].sel(body="cell"))], marker, color=EXP_COLOR,
-                        ms=7, label=f"tracked video, {'fit' if name == fit else 'theory'}")
+                ax.plot(
+                    [r],
+                    [float(tracked[name].sel(body="cell"))],
+                    marker,
+                    color=EXP_COLOR,
+                    ms=7,
+                    label=f"tracked video, {'fit' if name == fit else 'theory'}",
+                )
         ax.set_yscale("log")
         ax.legend(fontsize=6)
     return fig
@@ -308,8 +381,13 @@ def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
     ax = fig.subplots()
     radii = analysis["radius"].values
     for r, color in zip(radii, _radius_colors(radii), strict=True):
-        ax.plot(analysis["lag"].values, analysis["msd"].sel(radius=r, body="bot").values,
-                color=color, lw=0.8, label=f"in membrane, R = {r:g} cm")
+        ax.plot(
+            analysis["lag"].values,
+            analysis["msd"].sel(radius=r, body="bot").values,
+            color=color,
+            lw=0.8,
+            label=f"in membrane, R = {r:g} cm",
+        )
     free = free_bot["msd"].sel(body="bot")
     free = free.isel({d: 0 for d in free.dims if d != "lag"})
     ax.plot(free_bot["lag"].values, free.values, "k-", lw=2, label="free bot")
@@ -349,8 +427,11 @@ def _metadata(fmt: str, name: str) -> dict[str, str]:
     from softcell._version import __version__
 
     creator = f"softcell {__version__} ({name})"
-    return {"png": {"Software": creator}, "pdf": {"Creator": creator},
-            "svg": {"Creator": creator}}.get(fmt, {})
+    return {
+        "png": {"Software": creator},
+        "pdf": {"Creator": creator},
+        "svg": {"Creator": creator},
+    }.get(fmt, {})
 
 
 #: Figures :func:`make_figures` may write, each in every format of :data:`FORMATS`.
@@ -358,18 +439,42 @@ FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
 
 #: Variables each input of :func:`make_figures` must hold.
 NEEDS = {
-    "analysis": ("msd", "lag", "scaled_duration", "stop_pdf", "go_pdf", "mean_go_duration",
-                 "mean_stop_duration", "ballistic_velocity", "msd_slope", "v0_hat",
-                 "msd_slope_theory", "regime"),
-    "tracked": ("scaled_duration", "stop_pdf", "go_pdf", "mean_go_duration",
-                "mean_stop_duration", "ballistic_velocity", "msd_slope", "v0_hat",
-                "msd_slope_theory"),
+    "analysis": (
+        "msd",
+        "lag",
+        "scaled_duration",
+        "stop_pdf",
+        "go_pdf",
+        "mean_go_duration",
+        "mean_stop_duration",
+        "ballistic_velocity",
+        "msd_slope",
+        "v0_hat",
+        "msd_slope_theory",
+        "regime",
+    ),
+    "tracked": (
+        "scaled_duration",
+        "stop_pdf",
+        "go_pdf",
+        "mean_go_duration",
+        "mean_stop_duration",
+        "ballistic_velocity",
+        "msd_slope",
+        "v0_hat",
+        "msd_slope_theory",
+    ),
     "free_bot": ("msd", "lag"),
 }
 
 
-def check_inputs(analysis: xr.Dataset, *, simulations: xr.Dataset | None = None,
-                 free_bot: xr.Dataset | None = None, tracked: xr.Dataset | None = None) -> None:
+def check_inputs(
+    analysis: xr.Dataset,
+    *,
+    simulations: xr.Dataset | None = None,
+    free_bot: xr.Dataset | None = None,
+    tracked: xr.Dataset | None = None,
+) -> None:
     """Raise a one-line :class:`SoftcellError` unless the inputs are what the figures read:
     analyses (``softcell analyze``) holding the variables of :data:`NEEDS`, the analysis of a
     radius sweep, and a simulation Dataset."""
@@ -379,25 +484,36 @@ def check_inputs(analysis: xr.Dataset, *, simulations: xr.Dataset | None = None,
         origin = ds.attrs.get("softcell_origin")
         missing = [v for v in NEEDS[role] if v not in ds.variables]
         if origin != "analysis" or missing:
-            what = (f"lacks {', '.join(missing)}" if origin == "analysis"
-                    else f"is a {origin or 'non-softcell'} file, not an analysis")
-            raise SoftcellError(f"the {role.replace('_', ' ')} input {what}: give the output "
-                                "of `softcell analyze`"
-                                + (" on a tracked video" if role == "tracked" else ""))
+            what = (
+                f"lacks {', '.join(missing)}"
+                if origin == "analysis"
+                else f"is a {origin or 'non-softcell'} file, not an analysis"
+            )
+            raise SoftcellError(
+                f"the {role.replace('_', ' ')} input {what}: give the output "
+                "of `softcell analyze`" + (" on a tracked video" if role == "tracked" else "")
+            )
     if "radius" not in analysis.dims:
-        raise SoftcellError("the figures need the analysis of a radius sweep (a 'radius' "
-                            "dimension); this analysis has dims "
-                            f"{', '.join(analysis.dims) or 'none'}")
+        raise SoftcellError(
+            "the figures need the analysis of a radius sweep (a 'radius' "
+            "dimension); this analysis has dims "
+            f"{', '.join(analysis.dims) or 'none'}"
+        )
     if simulations is not None:
         from softcell.core.schema import validate
 
         validate(simulations)
 
 
-def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
-                 simulations: xr.Dataset | None = None, free_bot: xr.Dataset | None = None,
-                 tracked: xr.Dataset | None = None,
-                 formats: Sequence[str] = FORMATS) -> FigureSet:
+def make_figures(
+    analysis: xr.Dataset,
+    out: str | os.PathLike[str],
+    *,
+    simulations: xr.Dataset | None = None,
+    free_bot: xr.Dataset | None = None,
+    tracked: xr.Dataset | None = None,
+    formats: Sequence[str] = FORMATS,
+) -> FigureSet:
     """Draw every figure the inputs allow into ``out`` (``fig2.png``, ``fig2.pdf``, ...).
 
     Parameters
@@ -422,12 +538,18 @@ def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
     out = Path(out)
     result = FigureSet()
     plans = {
-        "fig2": (lambda: figure2(analysis, simulations), simulations is None,
-                 "needs the simulations (trajectories)"),
+        "fig2": (
+            lambda: figure2(analysis, simulations),
+            simulations is None,
+            "needs the simulations (trajectories)",
+        ),
         "fig3": (lambda: figure3(analysis, tracked), False, ""),
         "fig4": (lambda: figure4(analysis, tracked), False, ""),
-        "figS1": (lambda: figure_s1(analysis, free_bot), free_bot is None,
-                  "needs the free bot's analysis"),
+        "figS1": (
+            lambda: figure_s1(analysis, free_bot),
+            free_bot is None,
+            "needs the free bot's analysis",
+        ),
         "figS2": (lambda: figure_s2(analysis), False, ""),
         "figS3": (lambda: figure_s3(analysis), False, ""),
     }
@@ -440,8 +562,7 @@ def make_figures(analysis: xr.Dataset, out: str | os.PathLike[str], *,
             files = []
             for fmt in formats:
                 path = out / f"{name}.{fmt}"
-                fig.savefig(staging.path(path), format=fmt, dpi=150,
-                            metadata=_metadata(fmt, name))
+                fig.savefig(staging.path(path), format=fmt, dpi=150, metadata=_metadata(fmt, name))
                 files.append(path)
             result.files[name] = files
     return result

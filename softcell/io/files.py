@@ -62,8 +62,9 @@ def _read_only(path: Path) -> bool:
     return bool(os.statvfs(_existing_ancestor(path)).f_flag & os.ST_RDONLY)
 
 
-def storage_problem(path: str | os.PathLike[str], exc: BaseException | None = None,
-                    need: int = FULL_DISK_BYTES) -> str | None:
+def storage_problem(
+    path: str | os.PathLike[str], exc: BaseException | None = None, need: int = FULL_DISK_BYTES
+) -> str | None:
     """Why writing ``path`` failed, if the file system says: ``"no space left on device"``,
     ``"read-only file system"``, ``"permission denied"``, or None.
 
@@ -91,9 +92,11 @@ def storage_problem(path: str | os.PathLike[str], exc: BaseException | None = No
 
 def _error(path: Path, problem: str) -> StorageError:
     where = _existing_ancestor(path.parent)
-    return StorageError(f"cannot write {path}: {problem} ({human_bytes(free_bytes(where))} free "
-                        f"in {where})" if problem == "no space left on device"
-                        else f"cannot write {path}: {problem}")
+    return StorageError(
+        f"cannot write {path}: {problem} ({human_bytes(free_bytes(where))} free in {where})"
+        if problem == "no space left on device"
+        else f"cannot write {path}: {problem}"
+    )
 
 
 def _fsync_directory(directory: Path) -> None:
@@ -219,9 +222,15 @@ def _inside(path: Path, directory: Path) -> bool:
     return True
 
 
-def check_output(path: str | os.PathLike[str], kind: str, *,
-                 inputs: Iterable[str | os.PathLike[str]] = (), overwrite: bool = False,
-                 directory: bool = False, option: str = "-o") -> Path:
+def check_output(
+    path: str | os.PathLike[str],
+    kind: str,
+    *,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+    overwrite: bool = False,
+    directory: bool = False,
+    option: str = "-o",
+) -> Path:
     """Check, before anything is computed, that ``path`` may receive an output of ``kind``.
 
     Parameters
@@ -253,26 +262,37 @@ def check_output(path: str | os.PathLike[str], kind: str, *,
         if not source.exists():
             continue
         if path.exists() and os.path.samefile(path, source):
-            raise SoftcellError(f"{option} {path} is the input {source}: an output never "
-                                "replaces an input; choose another name")
+            raise SoftcellError(
+                f"{option} {path} is the input {source}: an output never "
+                "replaces an input; choose another name"
+            )
         if source.is_dir() and _inside(path, source.resolve()):
-            raise SoftcellError(f"{option} {path} is inside the input directory {source}: an "
-                                "output there would be read as part of it; write it elsewhere")
+            raise SoftcellError(
+                f"{option} {path} is inside the input directory {source}: an "
+                "output there would be read as part of it; write it elsewhere"
+            )
         if directory and source.is_file() and _inside(source.resolve(), path.resolve()):
-            raise SoftcellError(f"{option} {path} holds the input {source}: write the outputs "
-                                "to another directory")
+            raise SoftcellError(
+                f"{option} {path} holds the input {source}: write the outputs to another directory"
+            )
     if directory:
         if path.exists() and not path.is_dir():
             raise SoftcellError(f"{option} {path} is an existing file, not a directory")
     elif path.is_dir():
-        raise SoftcellError(f"{option} {path} is a directory; give a file name "
-                            f"(e.g. {path / ('out.mkv' if kind == 'video' else 'out.nc')})")
+        raise SoftcellError(
+            f"{option} {path} is a directory; give a file name "
+            f"(e.g. {path / ('out.mkv' if kind == 'video' else 'out.nc')})"
+        )
     elif path.exists() and not overwrite:
         found = kind_of(path)
         if found != kind:
-            what = ("exists (a video carries no mark of who made it)" if kind == "video"
-                    else f"exists and is a softcell {found} file" if found
-                    else f"exists and is not a softcell {kind} file")
+            what = (
+                "exists (a video carries no mark of who made it)"
+                if kind == "video"
+                else f"exists and is a softcell {found} file"
+                if found
+                else f"exists and is not a softcell {kind} file"
+            )
             raise SoftcellError(f"{option} {path} {what}; pass --overwrite to replace it")
     check_writable(path if directory else path.parent)
     return path
@@ -291,8 +311,10 @@ def check_writable(directory: str | os.PathLike[str], need: int = 0) -> None:
         raise StorageError(f"cannot write to {directory}: permission denied")
     free = free_bytes(base)
     if need and free < need:
-        raise StorageError(f"cannot write to {directory}: no space left on device (the run "
-                           f"needs about {human_bytes(need)}, {human_bytes(free)} free)")
+        raise StorageError(
+            f"cannot write to {directory}: no space left on device (the run "
+            f"needs about {human_bytes(need)}, {human_bytes(free)} free)"
+        )
 
 
 def remove(paths: Iterable[str | os.PathLike[str]]) -> None:

@@ -72,8 +72,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     path = Path(path)
     ds = _to_cf(ds)
     with atomic_write(path) as tmp:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4",
-                     encoding=_encoding(ds, complevel))
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=_encoding(ds, complevel))
     return path
 
 
@@ -84,8 +83,10 @@ def _open(path: Path, chunks: Mapping[str, int] | None = None) -> xr.Dataset:
     try:
         return xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
     except (OSError, RuntimeError, ValueError, KeyError) as exc:
-        raise SoftcellError(f"cannot read {path}: not a NetCDF file, or truncated or corrupt "
-                            f"({type(exc).__name__}: {exc})") from None
+        raise SoftcellError(
+            f"cannot read {path}: not a NetCDF file, or truncated or corrupt "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
 
 
 #: Attribute marking the label variable that stands in for a text dimension coordinate.
@@ -98,8 +99,15 @@ def _to_cf(ds: xr.Dataset) -> xr.Dataset:
     for name in [c for c in ds.coords if ds[c].dims == (c,) and ds[c].dtype.kind in "UO"]:
         attrs = dict(ds[name].attrs)
         labels = np.asarray(ds[name].values).astype(str)
-        ds = ds.assign_coords({name: (name, np.arange(labels.size), {
-            "units": "1", "long_name": f"{attrs.get('long_name', name)} (index)"})})
+        ds = ds.assign_coords(
+            {
+                name: (
+                    name,
+                    np.arange(labels.size),
+                    {"units": "1", "long_name": f"{attrs.get('long_name', name)} (index)"},
+                )
+            }
+        )
         ds = ds.assign_coords({f"{name}_label": (name, labels, {**attrs, LABELS_OF: name})})
     return ds
 
@@ -124,12 +132,14 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
         try:
             return _from_cf(ds.load())
         except (OSError, RuntimeError, ValueError) as exc:
-            raise SoftcellError(f"cannot read {path}: truncated or corrupt "
-                                f"({type(exc).__name__}: {exc})") from None
+            raise SoftcellError(
+                f"cannot read {path}: truncated or corrupt ({type(exc).__name__}: {exc})"
+            ) from None
 
 
-def open_dataset(path: str | os.PathLike[str], *, chunks: Mapping[str, int] | None = None
-                 ) -> xr.Dataset:
+def open_dataset(
+    path: str | os.PathLike[str], *, chunks: Mapping[str, int] | None = None
+) -> xr.Dataset:
     """Open one softcell file, or a directory of files from one sweep, as one Dataset.
 
     Parameters
@@ -179,8 +189,9 @@ def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.D
     return parts[0] if len(parts) == 1 else combine_sweep(parts, names)
 
 
-def open_inputs(paths: list[str | os.PathLike[str]],
-                chunks: Mapping[str, int] | None = None) -> xr.Dataset:
+def open_inputs(
+    paths: list[str | os.PathLike[str]], chunks: Mapping[str, int] | None = None
+) -> xr.Dataset:
     """Open files and directories (each a sweep, see :func:`open_dataset`) as one Dataset: a
     single file as is, several files combined along their swept parameters. ``chunks`` as
     for :func:`open_dataset` (``{}``: one dask chunk per file, so that an analysis holds one
@@ -223,16 +234,22 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
             ds = ds.expand_dims(key) if key in ds.coords else ds.expand_dims({key: [vals[key]]})
             ds[key].attrs = _coordinate_attrs(key, units.get(key, "1"))
         for key, other in follows.items():
-            ds = ds.assign_coords({key: (other, [vals[key]],
-                                         _coordinate_attrs(key, units.get(key, "1")))})
+            ds = ds.assign_coords(
+                {key: (other, [vals[key]], _coordinate_attrs(key, units.get(key, "1")))}
+            )
         expanded.append(ds)
     fill = {"bot_phase": np.int8(-1)} if "bot_phase" in parts[0] else {}
     try:
-        combined = xr.combine_by_coords(expanded, join="outer", combine_attrs="drop_conflicts",
-                                        fill_value=fill or xr.core.dtypes.NA)
+        combined = xr.combine_by_coords(
+            expanded,
+            join="outer",
+            combine_attrs="drop_conflicts",
+            fill_value=fill or xr.core.dtypes.NA,
+        )
     except ValueError as exc:
-        raise SoftcellError(f"the files do not form one sweep ({exc}); "
-                            f"swept parameters: {swept or 'none'}") from None
+        raise SoftcellError(
+            f"the files do not form one sweep ({exc}); swept parameters: {swept or 'none'}"
+        ) from None
     merged = dict(values[0])
     for key in (*swept, *follows):
         merged[key] = sorted({v[key] for v in values})

@@ -52,9 +52,10 @@ def _fine_curve(mx: np.ndarray, my: np.ndarray, points: int) -> tuple[np.ndarray
     padded = np.zeros(points, dtype=complex)
     half = n // 2
     padded[:half] = spec[:half]
-    padded[-(n - half):] = spec[half:]
+    padded[-(n - half) :] = spec[half:]
     z = np.fft.ifft(padded) * points
     return z.real, z.imag
+
 
 @dataclass
 class RenderInfo:
@@ -68,13 +69,26 @@ class RenderInfo:
     coarser_than_video: bool
     notes: list[str] = field(default_factory=list)
 
-def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0,
-           point: dict[str, int] | None = None, px_per_cm: float = 10.0, fps: float = 30.0,
-           size: tuple[int, int] | None = None, start: float | None = None,
-           end: float | None = None, band_width: float = 0.3, head_mark: bool = True,
-           noise: float = 0.0,
-           blur: float = 0.0, illumination: float = 0.0, seed: int = 0,
-           progress: bool = False) -> RenderInfo:
+
+def render(
+    ds: xr.Dataset,
+    path: str | os.PathLike[str],
+    *,
+    realization: int = 0,
+    point: dict[str, int] | None = None,
+    px_per_cm: float = 10.0,
+    fps: float = 30.0,
+    size: tuple[int, int] | None = None,
+    start: float | None = None,
+    end: float | None = None,
+    band_width: float = 0.3,
+    head_mark: bool = True,
+    noise: float = 0.0,
+    blur: float = 0.0,
+    illumination: float = 0.0,
+    seed: int = 0,
+    progress: bool = False,
+) -> RenderInfo:
     """Render one realization as a top-view movie.
 
     Parameters
@@ -108,8 +122,14 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
     -------
     RenderInfo
     """
-    _check_render_arguments(px_per_cm=px_per_cm, fps=fps, band_width=band_width, noise=noise,
-                            blur=blur, illumination=illumination)
+    _check_render_arguments(
+        px_per_cm=px_per_cm,
+        fps=fps,
+        band_width=band_width,
+        noise=noise,
+        blur=blur,
+        illumination=illumination,
+    )
     path = Path(path)
     fourcc = cv2.VideoWriter_fourcc(*codec(path))
     sel = _realization(ds, realization, point)
@@ -138,14 +158,25 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
         if not writer.isOpened():
             raise SoftcellError(f"cannot open {path} for writing with codec {codec(path)}")
         try:
-            for index, t in enumerate(tqdm(times, disable=not progress, desc="render",
-                                           unit="frame")):
-                k = int(np.clip(np.searchsorted(time_valid, t, side="right") - 1, 0,
-                                time_valid.size - 2))
+            for index, t in enumerate(
+                tqdm(times, disable=not progress, desc="render", unit="frame")
+            ):
+                k = int(
+                    np.clip(
+                        np.searchsorted(time_valid, t, side="right") - 1, 0, time_valid.size - 2
+                    )
+                )
                 w = (t - time_valid[k]) / (time_valid[k + 1] - time_valid[k])
-                state = {name: (1 - w) * arr[k] + w * arr[k + 1]
-                         for name, arr in (("mx", mx), ("my", my), ("bx", bx), ("by", by),
-                                           ("angle", angle))}
+                state = {
+                    name: (1 - w) * arr[k] + w * arr[k + 1]
+                    for name, arr in (
+                        ("mx", mx),
+                        ("my", my),
+                        ("bx", bx),
+                        ("by", by),
+                        ("angle", angle),
+                    )
+                }
                 image = _draw(frame, background, state, a, b, band_width, head_mark)
                 if blur > 0:
                     image = cv2.GaussianBlur(image, (0, 0), blur)
@@ -156,35 +187,45 @@ def render(ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int = 0
                     # OpenCV's writer reports no failed write: watch the disk instead.
                     problem = storage_problem(tmp, need=frame_bytes)
                     if problem:
-                        raise StorageError(f"cannot write {path}: {problem} (after {index} "
-                                           f"of {times.size} frames)")
+                        raise StorageError(
+                            f"cannot write {path}: {problem} (after {index} of {times.size} frames)"
+                        )
         finally:
             writer.release()
         written = count_frames(tmp)
         if written != times.size:
             problem = storage_problem(tmp) or "the file is incomplete"
-            raise StorageError(f"cannot write {path}: {problem} ({written} of {times.size} "
-                               "frames read back)")
+            raise StorageError(
+                f"cannot write {path}: {problem} ({written} of {times.size} frames read back)"
+            )
     return RenderInfo(path, times, frame, not on_grid, coarse, notes)
+
 
 def _check_render_arguments(**values: float) -> None:
     """One line naming the first bad scale, rate, width or image effect."""
-    units = {"px_per_cm": "px/cm", "fps": "1/s", "band_width": "cm", "noise": "grey levels",
-             "blur": "px", "illumination": "1"}
+    units = {
+        "px_per_cm": "px/cm",
+        "fps": "1/s",
+        "band_width": "cm",
+        "noise": "grey levels",
+        "blur": "px",
+        "illumination": "1",
+    }
     for name in ("px_per_cm", "fps", "band_width"):
         value = values[name]
         if not (np.isfinite(value) and value > 0):
-            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
-                                f"{units[name]}")
+            raise SoftcellError(
+                f"{name} = {value} is not allowed: must be finite and > 0 {units[name]}"
+            )
     for name in ("noise", "blur", "illumination"):
         value = values[name]
         if not (np.isfinite(value) and value >= 0):
-            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 "
-                                f"{units[name]}")
+            raise SoftcellError(
+                f"{name} = {value} is not allowed: must be finite and >= 0 {units[name]}"
+            )
 
 
-def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None
-                 ) -> xr.Dataset:
+def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None) -> xr.Dataset:
     """The one realization (of one sweep point) to render; a one-line error for an index out
     of range, a sweep without a chosen point, or a free bot."""
     validate(ds)
@@ -194,40 +235,48 @@ def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None
             raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
     for dim in ds["bot_x"].dims[:-2]:
         if dim not in (point or {}):
-            raise SoftcellError(f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
-                                f"one with point {dim}=INDEX (0 .. {ds.sizes[dim] - 1}; "
-                                f"--point on the command line)")
+            raise SoftcellError(
+                f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
+                f"one with point {dim}=INDEX (0 .. {ds.sizes[dim] - 1}; "
+                f"--point on the command line)"
+            )
     sel = ds.isel(point or {}).isel(realization=realization)
     if not np.isfinite(np.asarray(sel["membrane_x"].values)).any():
         raise SoftcellError("this realization has no membrane (a free bot): nothing to render")
     return sel
 
 
-def _frame_times(time_valid: np.ndarray, start: float | None, end: float | None, fps: float
-                 ) -> tuple[np.ndarray, list[str], bool, bool]:
+def _frame_times(
+    time_valid: np.ndarray, start: float | None, end: float | None, fps: float
+) -> tuple[np.ndarray, list[str], bool, bool]:
     """The frame times (s) in [start, end], notes on interpolation, whether the record is
     coarser than the video somewhere, and whether every frame falls on a sample."""
     t0 = float(time_valid[0] if start is None else start)
     t1 = float(time_valid[-1] if end is None else end)
     if not time_valid[0] <= t0 < t1 <= time_valid[-1]:
-        raise SoftcellError(f"render span [{t0}, {t1}] s is not inside the record "
-                            f"[{time_valid[0]}, {time_valid[-1]}] s")
+        raise SoftcellError(
+            f"render span [{t0}, {t1}] s is not inside the record "
+            f"[{time_valid[0]}, {time_valid[-1]}] s"
+        )
     times = t0 + np.arange(int(np.floor((t1 - t0) * fps + 1e-9)) + 1) / fps
     notes = []
     step = np.diff(time_valid[(time_valid >= t0) & (time_valid <= t1)])
     coarse = bool(step.size and step.max() > 1.0 / fps * (1 + 1e-9))
     if coarse:
-        notes.append(f"the record is sampled every {step.max():g} s somewhere in the span, "
-                     f"more coarsely than the video (1/{fps:g} s): frames there are linear "
-                     "interpolations")
+        notes.append(
+            f"the record is sampled every {step.max():g} s somewhere in the span, "
+            f"more coarsely than the video (1/{fps:g} s): frames there are linear "
+            "interpolations"
+        )
     on_grid = np.isin(np.round(times, 9), np.round(time_valid, 9)).all()
     if not on_grid:
         notes.append("frame times fall between samples: states are interpolated linearly")
     return times, notes, coarse, on_grid
 
 
-def _frame_for(mx: np.ndarray, my: np.ndarray, span: np.ndarray, px_per_cm: float,
-               size: tuple[int, int] | None) -> Frame:
+def _frame_for(
+    mx: np.ndarray, my: np.ndarray, span: np.ndarray, px_per_cm: float, size: tuple[int, int] | None
+) -> Frame:
     """The pixel geometry: the region the membrane visits during ``span`` with a 2 cm margin,
     or ``size`` (px) centred on the first shape."""
     if size is None:
@@ -238,8 +287,9 @@ def _frame_for(mx: np.ndarray, my: np.ndarray, span: np.ndarray, px_per_cm: floa
     else:
         width, height = int(size[0]), int(size[1])
         cx, cy = float(np.mean(mx[0])), float(np.mean(my[0]))
-        frame = Frame(px_per_cm, width, height, cx - width / (2 * px_per_cm),
-                      cy - height / (2 * px_per_cm))
+        frame = Frame(
+            px_per_cm, width, height, cx - width / (2 * px_per_cm), cy - height / (2 * px_per_cm)
+        )
     _check_frame_size(frame)
     return frame
 
@@ -247,26 +297,38 @@ def _frame_for(mx: np.ndarray, my: np.ndarray, span: np.ndarray, px_per_cm: floa
 def _check_frame_size(frame: Frame) -> None:
     for side, value in (("width", frame.width), ("height", frame.height)):
         if not MIN_FRAME_SIDE <= value <= MAX_FRAME_SIDE:
-            raise SoftcellError(f"frame {side} = {value} px is not allowed: must be between "
-                                f"{MIN_FRAME_SIDE} and {MAX_FRAME_SIDE} px (scale "
-                                f"{frame.px_per_cm:g} px/cm; lower --px-per-cm or set --size)")
+            raise SoftcellError(
+                f"frame {side} = {value} px is not allowed: must be between "
+                f"{MIN_FRAME_SIDE} and {MAX_FRAME_SIDE} px (scale "
+                f"{frame.px_per_cm:g} px/cm; lower --px-per-cm or set --size)"
+            )
+
 
 def _background(frame: Frame, illumination: float) -> np.ndarray:
-    v, u = np.mgrid[0:frame.height, 0:frame.width].astype(np.float64)
+    v, u = np.mgrid[0 : frame.height, 0 : frame.width].astype(np.float64)
     gx, gy = u / max(frame.width - 1, 1) - 0.5, v / max(frame.height - 1, 1) - 0.5
     shade = 1.0 + illumination * (0.6 * gx + 0.3 * gy - 0.8 * (gx**2 + gy**2))
     return shade[..., None] * BACKGROUND
 
-def _draw(frame: Frame, background: np.ndarray, state: dict, a: float, b: float,
-          band_width: float, head_mark: bool = True) -> np.ndarray:
+
+def _draw(
+    frame: Frame,
+    background: np.ndarray,
+    state: dict,
+    a: float,
+    b: float,
+    band_width: float,
+    head_mark: bool = True,
+) -> np.ndarray:
     """One frame as float64 BGR; shapes are drawn on uint8 masks and blended."""
     mx, my = _fine_curve(state["mx"], state["my"], 720)
     u, v = frame.to_pixels(mx, my)
     pts = np.rint(np.stack([u, v], axis=1) * SUB).astype(np.int32)
     shape = (frame.height, frame.width)
     band = np.zeros(shape, np.uint8)
-    cv2.polylines(band, [pts], True, 255, max(1, int(round(band_width * frame.px_per_cm))),
-                  cv2.LINE_AA, SHIFT)
+    cv2.polylines(
+        band, [pts], True, 255, max(1, int(round(band_width * frame.px_per_cm))), cv2.LINE_AA, SHIFT
+    )
     bot = np.zeros(shape, np.uint8)
     cu, cv_ = frame.to_pixels(state["bx"], state["by"])
     axes = (int(round(a * frame.px_per_cm * SUB)), int(round(b * frame.px_per_cm * SUB)))
@@ -278,8 +340,15 @@ def _draw(frame: Frame, background: np.ndarray, state: dict, a: float, b: float,
     hy = state["by"] + 0.6 * a * np.sin(state["angle"])
     mu, mv = frame.to_pixels(hx, hy)
     if head_mark:
-        cv2.circle(mark, (int(round(float(mu) * SUB)), int(round(float(mv) * SUB))),
-                   int(round(0.3 * b * frame.px_per_cm * SUB)), 255, -1, cv2.LINE_AA, SHIFT)
+        cv2.circle(
+            mark,
+            (int(round(float(mu) * SUB)), int(round(float(mv) * SUB))),
+            int(round(0.3 * b * frame.px_per_cm * SUB)),
+            255,
+            -1,
+            cv2.LINE_AA,
+            SHIFT,
+        )
     image = background.copy()
     for layer, colour in ((bot, BOT), (mark, MARK), (band, BAND)):  # the wall hides the bot
         alpha = layer.astype(np.float64)[..., None] / 255.0

@@ -44,6 +44,7 @@ def codec(path: Path) -> str:
         return "mp4v"
     raise SoftcellError(f"video file {path} must end in .mkv or .avi (lossless) or .mp4")
 
+
 def count_frames(path: str | os.PathLike[str]) -> int:
     """Frames a finished video file holds, read back: the container's count, trusted only if
     its last frame can be seeked to and decoded and nothing follows it (0 for a file that
@@ -62,6 +63,7 @@ def count_frames(path: str | os.PathLike[str]) -> int:
         return stated if not capture.grab() else stated + 1
     finally:
         capture.release()
+
 
 def _read_ahead(capture: cv2.VideoCapture, depth: int = 8) -> Iterator[np.ndarray]:
     """Frames of ``capture`` decoded by a background thread (OpenCV releases the GIL), at
@@ -90,16 +92,28 @@ def _read_ahead(capture: cv2.VideoCapture, depth: int = 8) -> Iterator[np.ndarra
         stop.set()
         thread.join()
 
-def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
-          arena_size: float | None = None, origin: tuple[float, float] = (0.0, 0.0),
-          plate_size: float | None = None, camera: str | os.PathLike[str] | None = None,
-          camera_height: float | None = None, ring_height: float = 0.0,
-          bot_height: float = 0.0, ring_color: str = "red",
-          ring_threshold: float | None = None,
-          dark_fraction: float = DARK_FRACTION, fps: float | None = None, nodes: int = 64,
-          radius: float | None = None, overlay: str | os.PathLike[str] | None = None,
-          progress: bool = False, on_frame: Callable[[int], None] | None = None
-          ) -> xr.Dataset:
+
+def track(
+    video: str | os.PathLike[str],
+    *,
+    px_per_cm: float | None = None,
+    arena_size: float | None = None,
+    origin: tuple[float, float] = (0.0, 0.0),
+    plate_size: float | None = None,
+    camera: str | os.PathLike[str] | None = None,
+    camera_height: float | None = None,
+    ring_height: float = 0.0,
+    bot_height: float = 0.0,
+    ring_color: str = "red",
+    ring_threshold: float | None = None,
+    dark_fraction: float = DARK_FRACTION,
+    fps: float | None = None,
+    nodes: int = 64,
+    radius: float | None = None,
+    overlay: str | os.PathLike[str] | None = None,
+    progress: bool = False,
+    on_frame: Callable[[int], None] | None = None,
+) -> xr.Dataset:
     """Track a top-view video into the simulation schema (origin ``tracking``).
 
     Two geometries: a linear frame (``px_per_cm`` or ``arena_size``, and ``origin``: a camera
@@ -164,11 +178,21 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
     """
     video = Path(video)
     _check_track_arguments(video, px_per_cm, arena_size, origin, fps, nodes, radius)
-    _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_height,
-                            ring_height, bot_height, ring_threshold, dark_fraction)
+    _check_camera_arguments(
+        px_per_cm,
+        arena_size,
+        plate_size,
+        camera,
+        camera_height,
+        ring_height,
+        bot_height,
+        ring_threshold,
+        dark_fraction,
+    )
     if ring_color not in RING_COLORS:
-        raise SoftcellError(f"ring_color = {ring_color!r} is not allowed: one of "
-                            f"{', '.join(RING_COLORS)}")
+        raise SoftcellError(
+            f"ring_color = {ring_color!r} is not allowed: one of {', '.join(RING_COLORS)}"
+        )
     calibration = read_calibration(camera) if camera is not None else None
     capture = cv2.VideoCapture(str(video))
     try:
@@ -185,48 +209,83 @@ def track(video: str | os.PathLike[str], *, px_per_cm: float | None = None,
             raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
         attrs: dict[str, object]
         if plate_size is not None:
-            geometry = calibrate_from_plate(first, plate_size, camera_height=camera_height,
-                                            calibration=calibration)
+            geometry = calibrate_from_plate(
+                first, plate_size, camera_height=camera_height, calibration=calibration
+            )
             if ring_height or bot_height:
                 geometry.to_world(0.0, 0.0, max(ring_height, bot_height) / 2)  # or says why
-            attrs = {"softcell_plate_size_cm": float(plate_size),
-                     "softcell_camera": json.dumps(geometry.summary()),
-                     "softcell_ring_height_cm": float(ring_height),
-                     "softcell_bot_height_cm": float(bot_height)}
+            attrs = {
+                "softcell_plate_size_cm": float(plate_size),
+                "softcell_camera": json.dumps(geometry.summary()),
+                "softcell_ring_height_cm": float(ring_height),
+                "softcell_bot_height_cm": float(bot_height),
+            }
         else:
             if px_per_cm is None:
                 if arena_size is None:
-                    raise SoftcellError("pass px_per_cm, arena_size (cm) to derive it, or "
-                                        "plate_size (cm) to calibrate from the plate")
+                    raise SoftcellError(
+                        "pass px_per_cm, arena_size (cm) to derive it, or "
+                        "plate_size (cm) to calibrate from the plate"
+                    )
                 px_per_cm = width / arena_size
-            geometry = Frame(float(px_per_cm), width, height, float(origin[0]),
-                             float(origin[1]))
-            attrs = {"softcell_px_per_cm": float(px_per_cm),
-                     "softcell_origin_cm": np.array(origin, dtype=np.float64)}
-        tracker = Tracker(geometry, nodes, ring_z=ring_height / 2, bot_z=bot_height / 2,
-                          radius=radius, ring_color=ring_color,
-                          ring_threshold=ring_threshold,
-                          dark_fraction=dark_fraction)
+            geometry = Frame(float(px_per_cm), width, height, float(origin[0]), float(origin[1]))
+            attrs = {
+                "softcell_px_per_cm": float(px_per_cm),
+                "softcell_origin_cm": np.array(origin, dtype=np.float64),
+            }
+        tracker = Tracker(
+            geometry,
+            nodes,
+            ring_z=ring_height / 2,
+            bot_z=bot_height / 2,
+            radius=radius,
+            ring_color=ring_color,
+            ring_threshold=ring_threshold,
+            dark_fraction=dark_fraction,
+        )
         total = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) or None
         with _overlay_writer(overlay, rate, width, height) as draw:
-            result = _track_frames(itertools.chain([first], frames), tracker, rate, total,
-                                   progress, on_frame, draw)
+            result = _track_frames(
+                itertools.chain([first], frames), tracker, rate, total, progress, on_frame, draw
+            )
     finally:
         capture.release()
     failures = collections.Counter(r for r in result.reasons if r)
     if all(f == FLAGS["both_lost"] for f in result.flags):
         why = "; ".join(f"{n} x {reason}" for reason, n in failures.most_common())
-        hint = (" (is the scale right? check --plate-size or --px-per-cm, and --radius)"
-                if "perimeter" in why else "")
-        raise SoftcellError(f"no frame of {video} was tracked: no plausible ring found in any "
-                            f"of its {len(result.flags)} frames: {why}{hint}")
-    return tracked_dataset(result, nodes=nodes, radius=radius, attrs={
-        "softcell_video": video.name, "softcell_fps": rate, **attrs,
-        "softcell_tracking_failures": json.dumps(dict(failures.most_common()))})
+        hint = (
+            " (is the scale right? check --plate-size or --px-per-cm, and --radius)"
+            if "perimeter" in why
+            else ""
+        )
+        raise SoftcellError(
+            f"no frame of {video} was tracked: no plausible ring found in any "
+            f"of its {len(result.flags)} frames: {why}{hint}"
+        )
+    return tracked_dataset(
+        result,
+        nodes=nodes,
+        radius=radius,
+        attrs={
+            "softcell_video": video.name,
+            "softcell_fps": rate,
+            **attrs,
+            "softcell_tracking_failures": json.dumps(dict(failures.most_common())),
+        },
+    )
 
 
-def _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_height,
-                            ring_height, bot_height, ring_threshold, dark_fraction) -> None:
+def _check_camera_arguments(
+    px_per_cm,
+    arena_size,
+    plate_size,
+    camera,
+    camera_height,
+    ring_height,
+    bot_height,
+    ring_threshold,
+    dark_fraction,
+) -> None:
     for name, value in (("plate_size", plate_size), ("camera_height", camera_height)):
         if value is not None and not (np.isfinite(value) and value > 0):
             raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 cm")
@@ -234,50 +293,70 @@ def _check_camera_arguments(px_per_cm, arena_size, plate_size, camera, camera_he
         if not (np.isfinite(value) and value >= 0):
             raise SoftcellError(f"{name} = {value} is not allowed: must be finite and >= 0 cm")
     if plate_size is not None and (px_per_cm is not None or arena_size is not None):
-        raise SoftcellError("plate_size calibrates the camera; px_per_cm and arena_size set a "
-                            "linear frame instead: give one of them")
+        raise SoftcellError(
+            "plate_size calibrates the camera; px_per_cm and arena_size set a "
+            "linear frame instead: give one of them"
+        )
     if plate_size is None:
-        for name, value in (("camera", camera), ("camera_height", camera_height),
-                            ("ring_height", ring_height or None),
-                            ("bot_height", bot_height or None)):
+        for name, value in (
+            ("camera", camera),
+            ("camera_height", camera_height),
+            ("ring_height", ring_height or None),
+            ("bot_height", bot_height or None),
+        ):
             if value is not None:
-                raise SoftcellError(f"{name} needs plate_size: parallax and lenses are "
-                                    "corrected only with a camera calibrated from the plate")
-    if ring_threshold is not None and not (np.isfinite(ring_threshold)
-                                           and 0 < ring_threshold < 1):
-        raise SoftcellError(f"ring_threshold = {ring_threshold} is not allowed: a redness "
-                            "(R - max(G, B)) / R between 0 and 1")
+                raise SoftcellError(
+                    f"{name} needs plate_size: parallax and lenses are "
+                    "corrected only with a camera calibrated from the plate"
+                )
+    if ring_threshold is not None and not (np.isfinite(ring_threshold) and 0 < ring_threshold < 1):
+        raise SoftcellError(
+            f"ring_threshold = {ring_threshold} is not allowed: a redness "
+            "(R - max(G, B)) / R between 0 and 1"
+        )
     if not (np.isfinite(dark_fraction) and 0 < dark_fraction < 1):
-        raise SoftcellError(f"dark_fraction = {dark_fraction} is not allowed: must be between "
-                            "0 and 1 (of the plate's grey level)")
+        raise SoftcellError(
+            f"dark_fraction = {dark_fraction} is not allowed: must be between "
+            "0 and 1 (of the plate's grey level)"
+        )
 
 
-def _check_track_arguments(video: Path, px_per_cm, arena_size, origin, fps, nodes: int,
-                           radius) -> None:
+def _check_track_arguments(
+    video: Path, px_per_cm, arena_size, origin, fps, nodes: int, radius
+) -> None:
     if nodes < 3 or nodes > MAX_TRACKED_NODES:
-        raise SoftcellError(f"nodes = {nodes} is not allowed: must be an integer between 3 "
-                            f"and {MAX_TRACKED_NODES}")
-    for name, value, unit in (("px_per_cm", px_per_cm, "px/cm"), ("arena_size", arena_size, "cm"),
-                              ("fps", fps, "1/s"), ("radius", radius, "cm")):
+        raise SoftcellError(
+            f"nodes = {nodes} is not allowed: must be an integer between 3 and {MAX_TRACKED_NODES}"
+        )
+    for name, value, unit in (
+        ("px_per_cm", px_per_cm, "px/cm"),
+        ("arena_size", arena_size, "cm"),
+        ("fps", fps, "1/s"),
+        ("radius", radius, "cm"),
+    ):
         if value is not None and not (np.isfinite(value) and value > 0):
-            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 "
-                                f"{unit}")
+            raise SoftcellError(f"{name} = {value} is not allowed: must be finite and > 0 {unit}")
     if px_per_cm is not None and arena_size is not None:
         raise SoftcellError("px_per_cm and arena_size both set the scale: give one")
     if len(origin) != 2 or not np.isfinite(origin).all():
-        raise SoftcellError(f"origin = {tuple(origin)} is not allowed: must be two finite "
-                            "coordinates X,Y in cm")
+        raise SoftcellError(
+            f"origin = {tuple(origin)} is not allowed: must be two finite coordinates X,Y in cm"
+        )
     if not video.is_file():
         raise SoftcellError(f"no such video file: {video}")
     if video.stat().st_size == 0:
         raise SoftcellError(f"video file {video} is empty")
 
 
-def _track_frames(frames: Iterator[np.ndarray], tracker: Tracker, rate: float,
-                  total: int | None, progress: bool,
-                  on_frame: Callable[[int], None] | None,
-                  draw: Callable[[np.ndarray, Tracker, tuple], None] | None = None
-                  ) -> TrackResult:
+def _track_frames(
+    frames: Iterator[np.ndarray],
+    tracker: Tracker,
+    rate: float,
+    total: int | None,
+    progress: bool,
+    on_frame: Callable[[int], None] | None,
+    draw: Callable[[np.ndarray, Tracker, tuple], None] | None = None,
+) -> TrackResult:
     """Run the tracker over every frame; frame k is at time k / rate (s)."""
     from softcell.config import progress_bar_class
 
@@ -303,8 +382,9 @@ def _track_frames(frames: Iterator[np.ndarray], tracker: Tracker, rate: float,
 
 
 @contextmanager
-def _overlay_writer(path: str | os.PathLike[str] | None, rate: float, width: int, height: int
-                    ) -> Iterator[Callable[[np.ndarray, Tracker, tuple], None] | None]:
+def _overlay_writer(
+    path: str | os.PathLike[str] | None, rate: float, width: int, height: int
+) -> Iterator[Callable[[np.ndarray, Tracker, tuple], None] | None]:
     """A function that draws one tracked frame into the overlay movie at ``path`` (written
     atomically), or None without a path."""
     if path is None:
@@ -317,14 +397,14 @@ def _overlay_writer(path: str | os.PathLike[str] | None, rate: float, width: int
         if not writer.isOpened():
             raise SoftcellError(f"cannot write the overlay video {path}")
         try:
-            yield lambda image, tracker, state: writer.write(draw_overlay(image, tracker,
-                                                                          *state))
+            yield lambda image, tracker, state: writer.write(draw_overlay(image, tracker, *state))
         finally:
             writer.release()
 
 
-def draw_overlay(image: np.ndarray, tracker: Tracker, time: float, flag: int, gc, membrane,
-                 bot) -> np.ndarray:
+def draw_overlay(
+    image: np.ndarray, tracker: Tracker, time: float, flag: int, gc, membrane, bot
+) -> np.ndarray:
     """One frame with what was tracked drawn on it: the membrane's midline (green), its GC
     (a cross), the bot's outline (yellow) and heading (an arrow of 3 cm), or the reason a
     frame was lost (red text)."""
@@ -336,20 +416,43 @@ def draw_overlay(image: np.ndarray, tracker: Tracker, time: float, flag: int, gc
         pts = np.rint(np.stack([u, v], axis=1) * scale).astype(np.int32)
         cv2.polylines(out, [pts], True, (60, 220, 60), thick, cv2.LINE_AA, 4)
         gu, gv = geometry.to_pixels(np.array([gc[0]]), np.array([gc[1]]), tracker.ring_z)
-        cv2.drawMarker(out, (int(round(gu[0])), int(round(gv[0]))), (60, 220, 60),
-                       cv2.MARKER_CROSS, 12 * thick, thick)
+        cv2.drawMarker(
+            out,
+            (int(round(gu[0])), int(round(gv[0]))),
+            (60, 220, 60),
+            cv2.MARKER_CROSS,
+            12 * thick,
+            thick,
+        )
     if np.isfinite(bot[0]) and tracker.bot_outline is not None:
-        cv2.polylines(out, [tracker.bot_outline.astype(np.int32)], True, (0, 220, 255), thick,
-                      cv2.LINE_AA)
-        ends = geometry.to_pixels(np.array([bot[0], bot[0] + 3 * np.cos(bot[2])]),
-                                  np.array([bot[1], bot[1] + 3 * np.sin(bot[2])]),
-                                  tracker.bot_z)
-        cv2.arrowedLine(out, (int(round(ends[0][0])), int(round(ends[1][0]))),
-                        (int(round(ends[0][1])), int(round(ends[1][1]))), (0, 220, 255),
-                        thick, cv2.LINE_AA, tipLength=0.3)
+        cv2.polylines(
+            out, [tracker.bot_outline.astype(np.int32)], True, (0, 220, 255), thick, cv2.LINE_AA
+        )
+        ends = geometry.to_pixels(
+            np.array([bot[0], bot[0] + 3 * np.cos(bot[2])]),
+            np.array([bot[1], bot[1] + 3 * np.sin(bot[2])]),
+            tracker.bot_z,
+        )
+        cv2.arrowedLine(
+            out,
+            (int(round(ends[0][0])), int(round(ends[1][0]))),
+            (int(round(ends[0][1])), int(round(ends[1][1]))),
+            (0, 220, 255),
+            thick,
+            cv2.LINE_AA,
+            tipLength=0.3,
+        )
     text = f"t = {time:.2f} s"
     if flag != FLAGS["ok"]:
         text += f"  LOST ({tracker.reason})"
-    cv2.putText(out, text, (10, 30 * thick), cv2.FONT_HERSHEY_SIMPLEX, 0.8 * thick,
-                (0, 0, 230) if flag != FLAGS["ok"] else (40, 40, 40), thick, cv2.LINE_AA)
+    cv2.putText(
+        out,
+        text,
+        (10, 30 * thick),
+        cv2.FONT_HERSHEY_SIMPLEX,
+        0.8 * thick,
+        (0, 0, 230) if flag != FLAGS["ok"] else (40, 40, 40),
+        thick,
+        cv2.LINE_AA,
+    )
     return out

@@ -114,9 +114,30 @@ def active_points(hww, hwp, active):
 
 # A compiled inner loop: exempt from the complexity limit of the rest of the code.
 @njit(**JIT)
-def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index, active,  # noqa: C901
-                      n_active, buf_a, buf_b, scratch, cursor, a_hat, b_hat, g_hat, cal_a,
-                      cal_b, factors, orders, jac):
+def assemble_jacobian(  # noqa: C901
+    hww,
+    hwp,
+    hpp,
+    lc,
+    mobility,
+    bot_mobility,
+    twiddle,
+    index,
+    active,  # noqa: C901
+    n_active,
+    buf_a,
+    buf_b,
+    scratch,
+    cursor,
+    a_hat,
+    b_hat,
+    g_hat,
+    cal_a,
+    cal_b,
+    factors,
+    orders,
+    jac,
+):
     """Add to ``jac`` (float64[n_u, n_u], 1/s) the energy terms' part of the Jacobian, from
     their pointwise second derivatives at the N = len(hww) points of one grid, and reset
     ``hww, hwp, hpp`` to zero (they must be zero before the terms add into them).
@@ -147,9 +168,12 @@ def assemble_jacobian(hww, hwp, hpp, lc, mobility, bot_mobility, twiddle, index,
             count = 0
             for t in range(n_active):
                 i = active[t]
-                if (hww[i, 2 * al, 2 * be] != 0.0 or hww[i, 2 * al, 2 * be + 1] != 0.0
-                        or hww[i, 2 * al + 1, 2 * be] != 0.0
-                        or hww[i, 2 * al + 1, 2 * be + 1] != 0.0):
+                if (
+                    hww[i, 2 * al, 2 * be] != 0.0
+                    or hww[i, 2 * al, 2 * be + 1] != 0.0
+                    or hww[i, 2 * al + 1, 2 * be] != 0.0
+                    or hww[i, 2 * al + 1, 2 * be + 1] != 0.0
+                ):
                     index[count] = i
                     count += 1
             if count == 0:

@@ -119,5 +119,6 @@ def dense_output(u, ynew, k, hd, dense):
 def dense_value(dense, theta, out):
     """The state at the fraction ``theta`` in [0, 1] of the last step."""
     for i in range(out.size):
-        out[i] = ((1.0 - theta) * dense[0, i] + theta * (
-            dense[1, i] + (1.0 - theta) * (dense[2, i] + theta * dense[3, i])))
+        out[i] = (1.0 - theta) * dense[0, i] + theta * (
+            dense[1, i] + (1.0 - theta) * (dense[2, i] + theta * dense[3, i])
+        )

@@ -9,8 +9,7 @@ from softcell.config import JIT
 
 
 @njit(**JIT)
-def phases(labels: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                              np.ndarray]:
+def phases(labels: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The complete phases of a label series.
 
     Parameters

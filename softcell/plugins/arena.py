@@ -29,8 +29,9 @@ from softcell.errors import ParameterError
 
 
 @njit(**JIT)
-def arena_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                   p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def arena_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     half, amplitude, length = 0.5 * coefficients[0], coefficients[1], coefficients[2]
     cutoff = CONTACT_CUTOFF_LENGTHS * length
     scale = context[0] / (2.0 * math.pi) * amplitude / length
@@ -124,11 +125,18 @@ class Arena(EnergyTerm):
     @classmethod
     def check(cls, params):
         side = float(params.arena_side)
-        inner = 2 * (max(float(params.radius), float(params.bot_semi_major))
-                     + CONTACT_CUTOFF_LENGTHS * float(params.contact_length))
+        inner = 2 * (
+            max(float(params.radius), float(params.bot_semi_major))
+            + CONTACT_CUTOFF_LENGTHS * float(params.contact_length)
+        )
         if side <= inner:
-            raise ParameterError("arena_side", side, f"must be > {inner:g} cm, so that the "
-                                 "membrane (radius) and the bot start clear of the walls", "cm")
+            raise ParameterError(
+                "arena_side",
+                side,
+                f"must be > {inner:g} cm, so that the "
+                "membrane (radius) and the bot start clear of the walls",
+                "cm",
+            )
 
     def partials_kernel(self):
         return arena_partials

@@ -18,8 +18,9 @@ from softcell.core.plugin.hookspecs import hookimpl
 
 
 @njit(**JIT)
-def bending_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                     p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def bending_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     k = coefficients[0]
     for n in range(xp.size):
         s2 = xp[n] * xp[n] + yp[n] * yp[n]

@@ -41,8 +41,9 @@ def _near(dx, dy, c, s, a, b, cutoff):
 
 
 @njit(**JIT)
-def contact_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                     p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def contact_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     amplitude, length = coefficients[0], coefficients[1]
     l0, a, b = context[0], context[1], context[2]
     cutoff = CONTACT_CUTOFF_LENGTHS * length
@@ -127,9 +128,14 @@ class Contact(EnergyTerm):
     def density(self, x, y, xp, yp, xpp, ypp, pose):
         p = self.params
         cutoff = CONTACT_CUTOFF_LENGTHS * p.contact_length
-        rho = np.array([signed_distance(xn, yn, pose[0], pose[1], pose[2],
-                                        p.bot_semi_major, p.bot_semi_minor)[0]
-                        for xn, yn in zip(x, y, strict=True)])
+        rho = np.array(
+            [
+                signed_distance(
+                    xn, yn, pose[0], pose[1], pose[2], p.bot_semi_major, p.bot_semi_minor
+                )[0]
+                for xn, yn in zip(x, y, strict=True)
+            ]
+        )
         e = p.membrane_length / (2 * np.pi) * p.contact_amplitude * np.exp(-rho / p.contact_length)
         return np.where(rho > cutoff, 0.0, e)
 

@@ -32,12 +32,17 @@ class ExplicitEulerStepper(Stepper):
     def __init__(self, model: Model, dt: float) -> None:
         law = friction.compiled_friction(model.friction) if model.nonlinear_friction else None
         self.segment = compile_module(
-            "explicit-euler", template(__package__ + ".templates", "explicit_euler.py"),
-            {"partials": model.partials, "drive": model.drive, "LAW": law is not None,
-             # unused (and pruned by numba) with the linear law, or without bot energies
-             "friction_velocity": law.velocity if law else 0,
-             "HAS_BOT": bool(model.bot_terms),
-             "bot_forces": compose_bot(model.terms)[0] if model.bot_terms else 0},
+            "explicit-euler",
+            template(__package__ + ".templates", "explicit_euler.py"),
+            {
+                "partials": model.partials,
+                "drive": model.drive,
+                "LAW": law is not None,
+                # unused (and pruned by numba) with the linear law, or without bot energies
+                "friction_velocity": law.velocity if law else 0,
+                "HAS_BOT": bool(model.bot_terms),
+                "bot_forces": compose_bot(model.terms)[0] if model.bot_terms else 0,
+            },
             f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}"
             + (f"; {model.friction.name}" if law else ""),
         ).segment
@@ -45,10 +50,13 @@ class ExplicitEulerStepper(Stepper):
         self.law = friction.model_workspace(model, 2 * (2 * model.cutoff + 1) + 3)
 
     def start(self, modes, pose, schedule):
-        return {"modes": modes.astype(np.complex128).copy(),
-                "pose": np.asarray(pose, dtype=np.float64).copy(),
-                "time": np.zeros(1), "step": np.zeros(1, dtype=np.int64),
-                "phase_index": np.zeros(1, dtype=np.int64)}
+        return {
+            "modes": modes.astype(np.complex128).copy(),
+            "pose": np.asarray(pose, dtype=np.float64).copy(),
+            "time": np.zeros(1),
+            "step": np.zeros(1, dtype=np.int64),
+            "phase_index": np.zeros(1, dtype=np.int64),
+        }
 
     def advance(self, state, schedule: Schedule, t_end: float) -> None:
         target = round(t_end / self.dt)
@@ -56,10 +64,24 @@ class ExplicitEulerStepper(Stepper):
             raise ParameterError("dt", self.dt, f"must divide the sample time {t_end:g} s", "s")
         m = self.model
         step, p = self.segment(
-            state["modes"], state["pose"], int(state["step"][0]), int(state["phase_index"][0]),
-            int(target - state["step"][0]), self.dt, schedule.start, schedule.phase,
-            schedule.data, m.coefficients, m.context, m.drive_coefficients,
-            friction.mobility(m), m.bot_mobility, m.nodes, m.has_membrane, self.law)
+            state["modes"],
+            state["pose"],
+            int(state["step"][0]),
+            int(state["phase_index"][0]),
+            int(target - state["step"][0]),
+            self.dt,
+            schedule.start,
+            schedule.phase,
+            schedule.data,
+            m.coefficients,
+            m.context,
+            m.drive_coefficients,
+            friction.mobility(m),
+            m.bot_mobility,
+            m.nodes,
+            m.has_membrane,
+            self.law,
+        )
         state["step"][0], state["phase_index"][0] = step, p
         state["time"][0] = step * self.dt
 
@@ -77,8 +99,13 @@ class ExplicitEuler(Integrator):
         for name in ("sample_every", "sample_every_late", "sample_switch"):
             ratio = float(params[name]) / dt
             if abs(ratio - round(ratio)) > 1e-6 * max(1.0, ratio):
-                raise ParameterError("dt", dt, f"must divide {name} = {params[name]:g} s "
-                                     "(explicit_euler samples on whole steps)", "s")
+                raise ParameterError(
+                    "dt",
+                    dt,
+                    f"must divide {name} = {params[name]:g} s "
+                    "(explicit_euler samples on whole steps)",
+                    "s",
+                )
 
     def build(self, model: Model) -> ExplicitEulerStepper:
         dt = float(self.params.dt)
@@ -86,9 +113,13 @@ class ExplicitEuler(Integrator):
             rate = explicit_decay_rate(model)
             if dt * rate >= 2.0:
                 raise ParameterError(
-                    "dt", dt, f"must be < 2 / lambda_max = {2 / rate:.4g} s for explicit_euler "
+                    "dt",
+                    dt,
+                    f"must be < 2 / lambda_max = {2 / rate:.4g} s for explicit_euler "
                     f"to be stable (lambda_max = {rate:.4g} 1/s at cutoff = {model.cutoff}, "
-                    f"radius = {model.params.radius:g} cm)", "s")
+                    f"radius = {model.params.radius:g} cm)",
+                    "s",
+                )
         return ExplicitEulerStepper(model, dt)
 
 

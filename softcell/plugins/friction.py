@@ -123,15 +123,27 @@ class Coulomb(FrictionLaw):
     """Static friction: no motion while |f| <= f_s, then (|f| - f_s) / gamma_mem along f."""
 
     name = "coulomb"
-    description = ("static threshold f_s, then viscous sliding at (|f| - f_s) / gamma_mem; "
-                   "regularised over a width eps")
+    description = (
+        "static threshold f_s, then viscous sliding at (|f| - f_s) / gamma_mem; "
+        "regularised over a width eps"
+    )
     parameters = (
         MODEL_PARAMETERS["membrane_friction"],
-        ParameterSpec("membrane_static_friction", 1e-4, "N cm-1",
-                      "static friction f_s of the membrane, per unit length",
-                      minimum=0.0, minimum_inclusive=True),
-        ParameterSpec("static_friction_width", 1e-5, "N cm-1",
-                      "regularisation width eps of the static friction law", minimum=0.0),
+        ParameterSpec(
+            "membrane_static_friction",
+            1e-4,
+            "N cm-1",
+            "static friction f_s of the membrane, per unit length",
+            minimum=0.0,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "static_friction_width",
+            1e-5,
+            "N cm-1",
+            "regularisation width eps of the static friction law",
+            minimum=0.0,
+        ),
     )
 
     def velocity_kernel(self):

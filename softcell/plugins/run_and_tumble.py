@@ -21,8 +21,9 @@ from softcell.core.schema import PHASE_RUN as RUN
 from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 
 
-def alternating_schedule(rng: np.random.Generator, duration: float, shortest: float,
-                         longest: float) -> Schedule:
+def alternating_schedule(
+    rng: np.random.Generator, duration: float, shortest: float, longest: float
+) -> Schedule:
     """Run, tumble, run, ... with U[shortest, longest] durations covering [0, duration] s;
     the datum of a tumble is its turn sign (+1 counterclockwise, -1 clockwise)."""
     count = int(math.ceil(duration / shortest)) + 1
@@ -74,8 +75,9 @@ class RunAndTumble(DrivingProtocol):
     parameters = (P["drive_force"], P["drive_torque"], P["phase_min"], P["phase_max"])
 
     def schedule(self, rng, duration):
-        return alternating_schedule(rng, duration, float(self.params["phase_min"]),
-                                    float(self.params["phase_max"]))
+        return alternating_schedule(
+            rng, duration, float(self.params["phase_min"]), float(self.params["phase_max"])
+        )
 
     def initial_heading(self, rng):
         return float(rng.uniform(0.0, 2.0 * np.pi))
@@ -88,17 +90,32 @@ class PivotRunAndTumble(RunAndTumble):
     """As run_and_tumble, but a tumble turns the bot about a pivot offset along its minor axis."""
 
     name = "pivot_run_and_tumble"
-    description = ("runs and tumbles about a pivot offset d along the minor axis "
-                   "(inner side of the turn, or fixed), as in the experiments")
-    parameters = (*RunAndTumble.parameters, P["bot_friction"], P["bot_rotational_friction"],
-                  P["pivot_offset"], P["pivot_side"])
+    description = (
+        "runs and tumbles about a pivot offset d along the minor axis "
+        "(inner side of the turn, or fixed), as in the experiments"
+    )
+    parameters = (
+        *RunAndTumble.parameters,
+        P["bot_friction"],
+        P["bot_rotational_friction"],
+        P["pivot_offset"],
+        P["pivot_side"],
+    )
 
     def coefficients(self):
         """F0 (N), T0 (N cm), gamma_T, gamma_R, pivot offset d (cm), 1.0 inner / 0.0 fixed."""
         p = self.params
-        return np.array([p.drive_force, p.drive_torque, p.bot_friction,
-                         p.bot_rotational_friction, p.pivot_offset,
-                         1.0 if p.pivot_side == "inner" else 0.0], dtype=np.float64)
+        return np.array(
+            [
+                p.drive_force,
+                p.drive_torque,
+                p.bot_friction,
+                p.bot_rotational_friction,
+                p.pivot_offset,
+                1.0 if p.pivot_side == "inner" else 0.0,
+            ],
+            dtype=np.float64,
+        )
 
     def drive_kernel(self):
         return pivot_drive

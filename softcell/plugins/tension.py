@@ -17,8 +17,9 @@ from softcell.core.plugin.hookspecs import hookimpl
 
 
 @njit(**JIT)
-def tension_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                     p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def tension_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     alpha = coefficients[0]
     l0 = context[0]
     two_pi = 2.0 * math.pi

@@ -85,8 +85,9 @@ class Scene:
         c = (self.size - 1) / 2
         return np.array([[self.focal, 0, c], [0, self.focal, c], [0, 0, 1.0]])
 
-    def project(self, x: np.ndarray, y: np.ndarray, z: np.ndarray | float = 0.0
-                ) -> tuple[np.ndarray, np.ndarray]:
+    def project(
+        self, x: np.ndarray, y: np.ndarray, z: np.ndarray | float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Pixel (u, v) of plate points (cm) at height z: the forward camera model."""
         world = np.stack(np.broadcast_arrays(x, y, z), axis=-1) - self.center
         cam = world @ self.rotation.T
@@ -172,8 +173,9 @@ class _Membrane:
         width = 4096  # remap's maps are images: at most 32767 on a side
         q = np.concatenate([q, np.zeros((-count % width, 2), np.float32)])
         grid = q.reshape(-1, width, 2)
-        out = cv2.remap(field, grid[..., 0], grid[..., 1], cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_REPLICATE)
+        out = cv2.remap(
+            field, grid[..., 0], grid[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
         return out.reshape(-1)[:count].reshape(p.shape[:-1])
 
 
@@ -183,13 +185,22 @@ def _bot_local(p: np.ndarray, bot: np.ndarray, heading: float) -> tuple[np.ndarr
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def _shade_roi(scene: Scene, p0: np.ndarray, g: np.ndarray, wall: _Membrane,
-               bot: np.ndarray, heading: float, a: float, b: float) -> np.ndarray:
+def _shade_roi(
+    scene: Scene,
+    p0: np.ndarray,
+    g: np.ndarray,
+    wall: _Membrane,
+    bot: np.ndarray,
+    heading: float,
+    a: float,
+    b: float,
+) -> np.ndarray:
     """Colour of the rays (p0, g) [..., 2]: the highest surface each meets, walking down."""
     top = max(scene.ring_height, scene.bot_height)
     # Heights walked down: the tops exactly (a top face is met there), the rest in steps.
-    levels = np.unique(np.concatenate([np.linspace(top, 0.0, 16),
-                                       [scene.ring_height, scene.bot_height]]))[::-1]
+    levels = np.unique(
+        np.concatenate([np.linspace(top, 0.0, 16), [scene.ring_height, scene.bot_height]])
+    )[::-1]
     colour = _plate_colour(scene, p0)
     # Cast shadows on the plate: the ray from the plate point towards the lamp meets the
     # bot or the wall below their tops.
@@ -209,8 +220,11 @@ def _shade_roi(scene: Scene, p0: np.ndarray, g: np.ndarray, wall: _Membrane,
                     blocked |= np.sign(sd) != np.sign(previous)
                 previous = sd
         colour = colour * (1 - scene.cast_shadow * blocked[..., None])
-    paper = np.array(scene.paper) if scene.paper is not None else (
-        OFF_RED_PAPER if scene.off_red else RED_PAPER)
+    paper = (
+        np.array(scene.paper)
+        if scene.paper is not None
+        else (OFF_RED_PAPER if scene.off_red else RED_PAPER)
+    )
     hit = np.zeros(p0.shape[:-1], bool)
     previous = None
     for z in levels:
@@ -247,8 +261,16 @@ def _shade_roi(scene: Scene, p0: np.ndarray, g: np.ndarray, wall: _Membrane,
     return colour
 
 
-def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float, float],
-         fps: float = 30.0, end: float | None = None, seed: int = 0) -> Footage:
+def film(
+    ds: xr.Dataset,
+    path: str | Path,
+    scene: Scene,
+    *,
+    offset: tuple[float, float],
+    fps: float = 30.0,
+    end: float | None = None,
+    seed: int = 0,
+) -> Footage:
     """Film realization 0 of a simulated cell with ``scene``'s camera; the simulation's
     origin sits at plate point ``offset`` (cm). ``.mkv``: lossless FFV1; ``.mp4``: MPEG-4
     4:2:0. Returns the truth at the frame times, in plate coordinates."""
@@ -266,12 +288,14 @@ def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float,
     for row in range(0, n, 128):
         uu, vv = _subpixel_grid(0, row, n, 128, 4)
         p0, _ = scene.rays(uu, vv)
-        background[row:row + 128] = _plate_colour(scene, p0).mean(axis=(2, 3))
-    rays = (np.empty((n, n, scene.oversample, scene.oversample, 2)),
-            np.empty((n, n, scene.oversample, scene.oversample, 2)))
+        background[row : row + 128] = _plate_colour(scene, p0).mean(axis=(2, 3))
+    rays = (
+        np.empty((n, n, scene.oversample, scene.oversample, 2)),
+        np.empty((n, n, scene.oversample, scene.oversample, 2)),
+    )
     for row in range(0, n, 128):
         uu, vv = _subpixel_grid(0, row, n, 128, scene.oversample)
-        rays[0][row:row + 128], rays[1][row:row + 128] = scene.rays(uu, vv)
+        rays[0][row : row + 128], rays[1][row : row + 128] = scene.rays(uu, vv)
     c = (n - 1) / 2
     yy, xx = np.mgrid[0:n, 0:n]
     r2 = ((xx - c) ** 2 + (yy - c) ** 2) / (2 * c**2)
@@ -283,8 +307,10 @@ def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float,
     off = np.asarray(offset)
 
     record_t = sel.time.values
-    record = {name: np.asarray(sel[name].transpose("time", ...).values)
-              for name in ("membrane_x", "membrane_y", "bot_x", "bot_y", "cell_x", "cell_y")}
+    record = {
+        name: np.asarray(sel[name].transpose("time", ...).values)
+        for name in ("membrane_x", "membrane_y", "bot_x", "bot_y", "cell_x", "cell_y")
+    }
     record["bot_angle"] = np.unwrap(sel.bot_angle.values)
 
     def at(name, t):
@@ -295,8 +321,12 @@ def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float,
 
     def state(t):
         curve = np.stack([at("membrane_x", t), at("membrane_y", t)], axis=1) + off
-        return (curve, np.array([at("bot_x", t), at("bot_y", t)]) + off, at("bot_angle", t),
-                np.array([at("cell_x", t), at("cell_y", t)]) + off)
+        return (
+            curve,
+            np.array([at("bot_x", t), at("bot_y", t)]) + off,
+            at("bot_angle", t),
+            np.array([at("cell_x", t), at("cell_y", t)]) + off,
+        )
 
     try:
         for t in times:
@@ -321,14 +351,18 @@ def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float,
                 g = rays[1][v0:v1, u0:u1]
                 roi = _shade_roi(scene, p0, g, wall, bot, heading, a, b).mean(axis=(2, 3))
                 frames.append((u0, v0, u1, v1, roi))
-            box = (min(f[0] for f in frames), min(f[1] for f in frames),
-                   max(f[2] for f in frames), max(f[3] for f in frames))
+            box = (
+                min(f[0] for f in frames),
+                min(f[1] for f in frames),
+                max(f[2] for f in frames),
+                max(f[3] for f in frames),
+            )
             acc = np.zeros((box[3] - box[1], box[2] - box[0], 3))
             for u0, v0, u1, v1, roi in frames:
-                part = background[box[1]:box[3], box[0]:box[2]].copy()
-                part[v0 - box[1]:v1 - box[1], u0 - box[0]:u1 - box[0]] = roi
+                part = background[box[1] : box[3], box[0] : box[2]].copy()
+                part[v0 - box[1] : v1 - box[1], u0 - box[0] : u1 - box[0]] = roi
                 acc += part
-            image[box[1]:box[3], box[0]:box[2]] = acc / len(frames)
+            image[box[1] : box[3], box[0] : box[2]] = acc / len(frames)
             curve, bot, heading, gc = state(t)
             truth["cell"].append(gc)
             truth["bot"].append(bot)
@@ -337,8 +371,15 @@ def film(ds: xr.Dataset, path: str | Path, scene: Scene, *, offset: tuple[float,
             writer.write(_sensor(image * vignette, scene.noise, rng))
     finally:
         writer.release()
-    return Footage(path, times, np.array(truth["cell"]), np.array(truth["bot"]),
-                   np.array(truth["heading"]), np.array(truth["membrane"]), scene)
+    return Footage(
+        path,
+        times,
+        np.array(truth["cell"]),
+        np.array(truth["bot"]),
+        np.array(truth["heading"]),
+        np.array(truth["membrane"]),
+        scene,
+    )
 
 
 def _fine(curve: np.ndarray, points: int) -> np.ndarray:
@@ -348,7 +389,7 @@ def _fine(curve: np.ndarray, points: int) -> np.ndarray:
     padded = np.zeros(points, complex)
     half = z.size // 2
     padded[:half] = spec[:half]
-    padded[-(z.size - half):] = spec[half:]
+    padded[-(z.size - half) :] = spec[half:]
     w = np.fft.ifft(padded) * points
     return np.stack([w.real, w.imag], axis=1)
 
@@ -371,5 +412,15 @@ def _sensor(image: np.ndarray, noise: float, rng: np.random.Generator) -> np.nda
 def every_effect(wall: float = 0.3) -> Scene:
     """The issue's camera: tilt 3 degrees, k1 = -0.1, vignetting, shadows, noise, blur,
     off-red paper, with a wall of ``wall`` cm."""
-    return replace(Scene(), tilt=(2.0, -2.2), k1=-0.1, vignetting=0.25, shadow=0.25,
-                   cast_shadow=0.2, noise=4.0, blur=0.5, off_red=True, wall=wall)
+    return replace(
+        Scene(),
+        tilt=(2.0, -2.2),
+        k1=-0.1,
+        vignetting=0.25,
+        shadow=0.25,
+        cast_shadow=0.2,
+        noise=4.0,
+        blur=0.5,
+        off_red=True,
+        wall=wall,
+    )

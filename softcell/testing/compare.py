@@ -60,17 +60,26 @@ def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
     stepper = build_integrator(integrator, params).build(model)
     rng = realization_rng(seed, 0, 0)
     # Compile outside the timing: a throwaway run over two sample intervals.
-    warm = parameters(float(params.radius), 2 * float(params.sample_every),
-                      **{k: v for k, v in params.given.items() if k not in ("radius", "duration")})
+    warm = parameters(
+        float(params.radius),
+        2 * float(params.sample_every),
+        **{k: v for k, v in params.given.items() if k not in ("radius", "duration")},
+    )
     warm_model = build_model(warm, TERMS, PROTOCOL)
-    run_realization(warm_model, build_integrator(integrator, warm).build(warm_model),
-                    realization_rng(seed, 0, 0))
+    run_realization(
+        warm_model,
+        build_integrator(integrator, warm).build(warm_model),
+        realization_rng(seed, 0, 0),
+    )
     begin = time.perf_counter()
     record = run_realization(model, stepper, rng)
     wall = time.perf_counter() - begin
     statistics = getattr(stepper, "statistics", None)
-    stats = statistics(record.state) if statistics else {
-        "steps": int(record.state["step"][0]), "rejected": 0}
+    stats = (
+        statistics(record.state)
+        if statistics
+        else {"steps": int(record.state["step"][0]), "rejected": 0}
+    )
     return Run(record, wall, stats)
 
 
@@ -85,8 +94,9 @@ def contact_force(model: Model, record: Record) -> np.ndarray:
     return out
 
 
-def coarse_statistics(params: Parameters, record: Record, schedule_phase: np.ndarray
-                      ) -> dict[str, float]:
+def coarse_statistics(
+    params: Parameters, record: Record, schedule_phase: np.ndarray
+) -> dict[str, float]:
     """Mean cell speed in runs and in tumbles (cm/s), fraction of samples in go, mean bot-cell
     distance (cm) and fraction of samples in contact, over the whole record."""
     cell = record.modes[:, int(params.cutoff)]
@@ -99,10 +109,12 @@ def coarse_statistics(params: Parameters, record: Record, schedule_phase: np.nda
         "cell_speed_run": float(speed[phase == RUN].mean()),
         "cell_speed_tumble": float(speed[phase == TUMBLE].mean()),
         "go_fraction": float(np.mean(speed > GO_THRESHOLD)),
-        "bot_cell_distance": float(np.mean(np.abs(record.pose[:, 0] + 1j * record.pose[:, 1]
-                                                  - cell))),
-        "contact_fraction": float(np.mean(force > CONTACT_FRACTION_OF_F0
-                                          * float(params.drive_force))),
+        "bot_cell_distance": float(
+            np.mean(np.abs(record.pose[:, 0] + 1j * record.pose[:, 1] - cell))
+        ),
+        "contact_fraction": float(
+            np.mean(force > CONTACT_FRACTION_OF_F0 * float(params.drive_force))
+        ),
     }
 
 
@@ -113,39 +125,68 @@ def path_difference(a: Record, b: Record, cutoff: int) -> dict[str, float]:
         raise ValueError("the records are not sampled at the same times")
     bot = np.hypot(a.pose[:, 0] - b.pose[:, 0], a.pose[:, 1] - b.pose[:, 1])
     cell = np.abs(a.modes[:, cutoff] - b.modes[:, cutoff])
-    return {"bot": float(bot.max()), "cell": float(cell.max()),
-            "heading": float(np.abs(a.pose[:, 2] - b.pose[:, 2]).max())}
-
-
+    return {
+        "bot": float(bot.max()),
+        "cell": float(cell.max()),
+        "heading": float(np.abs(a.pose[:, 2] - b.pose[:, 2]).max()),
+    }
 
 
 def rodas4_rhs(model: Model, stepper, u: np.ndarray, phase: int = RUN) -> np.ndarray:
     """du/dt of rodas4's compiled right-hand side at the packed state ``u`` (cm, rad) in
     ``phase``, with the model's friction law; ``stepper`` is the model's rodas4 stepper."""
     out = np.zeros_like(u)
-    stepper.rhs(u, phase, 0.0, out, stepper.coefficients, model.context,
-                model.drive_coefficients, mobility(model), model.bot_mobility, True,
-                stepper.ws)
+    stepper.rhs(
+        u,
+        phase,
+        0.0,
+        out,
+        stepper.coefficients,
+        model.context,
+        model.drive_coefficients,
+        mobility(model),
+        model.bot_mobility,
+        True,
+        stepper.ws,
+    )
     return out
 
 
-def rodas4_jacobians(model: Model, stepper, u: np.ndarray, phase: int = RUN,
-                     step: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
+def rodas4_jacobians(
+    model: Model, stepper, u: np.ndarray, phase: int = RUN, step: float = 1e-7
+) -> tuple[np.ndarray, np.ndarray]:
     """(rodas4's Jacobian at ``u``, central differences of :func:`rodas4_rhs` with ``step``
     in every unknown): the two should agree to the differences' truncation error."""
     rodas4_rhs(model, stepper, u, phase)  # the Jacobian reads what the rhs left at u
-    stepper.jacobian(u, phase, 0.0, stepper.coefficients, model.context,
-                     model.drive_coefficients, mobility(model), model.bot_mobility, True,
-                     stepper.ws)
+    stepper.jacobian(
+        u,
+        phase,
+        0.0,
+        stepper.coefficients,
+        model.context,
+        model.drive_coefficients,
+        mobility(model),
+        model.bot_mobility,
+        True,
+        stepper.ws,
+    )
     jac = stepper.ws.jac.copy()
     diff = np.zeros_like(jac)
     for j in range(u.size):
         du = np.zeros_like(u)
         du[j] = step
-        diff[:, j] = (rodas4_rhs(model, stepper, u + du, phase)
-                      - rodas4_rhs(model, stepper, u - du, phase)) / (2 * step)
+        diff[:, j] = (
+            rodas4_rhs(model, stepper, u + du, phase) - rodas4_rhs(model, stepper, u - du, phase)
+        ) / (2 * step)
     return jac, diff
 
 
-__all__ = ["Run", "parameters", "run", "coarse_statistics", "path_difference", "rodas4_rhs",
-           "rodas4_jacobians"]
+__all__ = [
+    "Run",
+    "parameters",
+    "run",
+    "coarse_statistics",
+    "path_difference",
+    "rodas4_rhs",
+    "rodas4_jacobians",
+]

@@ -46,12 +46,17 @@ def valid_parameter_values(draw: st.DrawFn) -> dict[str, Any]:
 
 
 def _bad_number(spec: ParameterSpec) -> st.SearchStrategy[Any]:
-    bad: list[st.SearchStrategy[Any]] = [st.just(math.nan), st.just(math.inf),
-                                         st.just(-math.inf), st.just(True), st.text(max_size=3)
-                                         .filter(lambda s: not _is_number(s))]
+    bad: list[st.SearchStrategy[Any]] = [
+        st.just(math.nan),
+        st.just(math.inf),
+        st.just(-math.inf),
+        st.just(True),
+        st.text(max_size=3).filter(lambda s: not _is_number(s)),
+    ]
     if spec.minimum is not None:
-        below = st.floats(spec.minimum - 1e6, spec.minimum, exclude_max=spec.minimum_inclusive,
-                          **_finite)
+        below = st.floats(
+            spec.minimum - 1e6, spec.minimum, exclude_max=spec.minimum_inclusive, **_finite
+        )
         bad.append(below.map(int) if spec.kind is int else below)
     if spec.power_of_two:
         bad.append(st.integers(9, 10**6).filter(lambda n: n & (n - 1) != 0))
@@ -72,8 +77,11 @@ def _is_number(text: str) -> bool:
 def invalid_parameter_values(draw: st.DrawFn) -> tuple[dict[str, Any], str]:
     """A parameter set that breaks exactly one rule, and the name the error must carry."""
     values = draw(valid_parameter_values())
-    rule = draw(st.sampled_from(["range", "radius", "semi_minor", "cutoff", "stored_nodes",
-                                 "phase", "sampling"]))
+    rule = draw(
+        st.sampled_from(
+            ["range", "radius", "semi_minor", "cutoff", "stored_nodes", "phase", "sampling"]
+        )
+    )
     if rule == "range":
         name = draw(st.sampled_from(sorted(MODEL_PARAMETERS)))
         spec = MODEL_PARAMETERS[name]
@@ -103,8 +111,9 @@ def invalid_parameter_values(draw: st.DrawFn) -> tuple[dict[str, Any], str]:
 
 
 @st.composite
-def simulation_datasets(draw: st.DrawFn, max_realizations: int = 3, max_times: int = 12,
-                        max_nodes: int = 40) -> Any:
+def simulation_datasets(
+    draw: st.DrawFn, max_realizations: int = 3, max_times: int = 12, max_nodes: int = 40
+) -> Any:
     """Small Datasets that follow the simulation schema, values including NaN."""
     n_real = draw(st.integers(1, max_realizations))
     n_time = draw(st.integers(1, max_times))
@@ -118,11 +127,15 @@ def simulation_datasets(draw: st.DrawFn, max_realizations: int = 3, max_times: i
 
     values = draw(valid_parameter_values())
     return simulation_dataset(
-        time, np.arange(n_real) + draw(st.integers(0, 1000)),
-        membrane_x=field(n_real, n_time, n_node), membrane_y=field(n_real, n_time, n_node),
-        bot_x=field(n_real, n_time), bot_y=field(n_real, n_time),
+        time,
+        np.arange(n_real) + draw(st.integers(0, 1000)),
+        membrane_x=field(n_real, n_time, n_node),
+        membrane_y=field(n_real, n_time, n_node),
+        bot_x=field(n_real, n_time),
+        bot_y=field(n_real, n_time),
         bot_angle=field(n_real, n_time),
         bot_phase=draw(hnp.arrays(np.int8, (n_real, n_time), elements=st.sampled_from([-1, 0, 1]))),
-        parameters=Parameters(values), seed=draw(st.integers(0, 2**63 - 1)),
+        parameters=Parameters(values),
+        seed=draw(st.integers(0, 2**63 - 1)),
         components={"integrator": draw(st.sampled_from(["explicit_euler", "x"]))},
     )

@@ -17,8 +17,9 @@ from softcell.core.params import Parameters
 from softcell.core.schema import simulation_dataset
 
 
-def stop_and_go_path(rng: np.random.Generator, times: np.ndarray, speed: float, mean_go: float,
-                     mean_stop: float) -> tuple[np.ndarray, np.ndarray]:
+def stop_and_go_path(
+    rng: np.random.Generator, times: np.ndarray, speed: float, mean_go: float, mean_stop: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Positions x, y (cm) at ``times`` (s) of one stationary stop-and-go path from the
     origin: the first phase is go with probability p, every duration is exponential (so the
     path is stationary from t = 0)."""
@@ -37,10 +38,19 @@ def stop_and_go_path(rng: np.random.Generator, times: np.ndarray, speed: float, 
     return np.interp(times, t, x), np.interp(times, t, y)
 
 
-def stop_and_go_dataset(rng: np.random.Generator, times: np.ndarray, *, realizations: int,
-                        speed: float, mean_go: float, mean_stop: float,
-                        radius: float = 12.0, bot_offset: float = 6.0, nodes: int = 16,
-                        offset: Sequence[float] = (0.0, 0.0)) -> xr.Dataset:
+def stop_and_go_dataset(
+    rng: np.random.Generator,
+    times: np.ndarray,
+    *,
+    realizations: int,
+    speed: float,
+    mean_go: float,
+    mean_stop: float,
+    radius: float = 12.0,
+    bot_offset: float = 6.0,
+    nodes: int = 16,
+    offset: Sequence[float] = (0.0, 0.0),
+) -> xr.Dataset:
     """A simulation-schema Dataset whose cell follows :func:`stop_and_go_path`.
 
     The membrane is a circle of ``radius`` (cm) around the cell (``nodes`` points); the bot
@@ -49,8 +59,7 @@ def stop_and_go_dataset(rng: np.random.Generator, times: np.ndarray, *, realizat
     position.
     """
     times = np.asarray(times, dtype=np.float64)
-    paths = [stop_and_go_path(rng, times, speed, mean_go, mean_stop)
-             for _ in range(realizations)]
+    paths = [stop_and_go_path(rng, times, speed, mean_go, mean_stop) for _ in range(realizations)]
     cx = np.array([p[0] for p in paths]) + offset[0]
     cy = np.array([p[1] for p in paths]) + offset[1]
     angle = np.linspace(0, 2 * np.pi, nodes, endpoint=False)
@@ -60,10 +69,20 @@ def stop_and_go_dataset(rng: np.random.Generator, times: np.ndarray, *, realizat
     bx = cx + bot_offset * np.cos(turn)
     by = cy + bot_offset * np.sin(turn)
     return simulation_dataset(
-        times, np.arange(realizations), membrane_x=mx, membrane_y=my, cell_x=cx, cell_y=cy,
-        bot_x=bx, bot_y=by, bot_angle=turn, bot_phase=np.ones(cx.shape, dtype=np.int8),
-        parameters=Parameters({"radius": radius}), seed=0,
-        components={"synthetic": "stop_and_go_dataset"})
+        times,
+        np.arange(realizations),
+        membrane_x=mx,
+        membrane_y=my,
+        cell_x=cx,
+        cell_y=cy,
+        bot_x=bx,
+        bot_y=by,
+        bot_angle=turn,
+        bot_phase=np.ones(cx.shape, dtype=np.int8),
+        parameters=Parameters({"radius": radius}),
+        seed=0,
+        components={"synthetic": "stop_and_go_dataset"},
+    )
 
 
 def two_rate_times(fine: float, coarse: float, switch: float, end: float) -> np.ndarray:

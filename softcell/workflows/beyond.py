@@ -46,24 +46,34 @@ class Variant:
     unknown: str = ""
 
     def design(self, base: Design = QUICK) -> Design:
-        return replace(base, name=f"{base.name}-{self.name}",
-                       components={**DEFAULT_COMPONENTS, **self.components},
-                       parameters={**base.parameters, **self.parameters})
+        return replace(
+            base,
+            name=f"{base.name}-{self.name}",
+            components={**DEFAULT_COMPONENTS, **self.components},
+            parameters={**base.parameters, **self.parameters},
+        )
 
 
 def _coulomb(threshold: float) -> Variant:
-    return Variant(f"coulomb_{threshold:g}", f"coulomb, f_s = {threshold:g} N/cm",
-                   {"friction_law": "coulomb"},
-                   {"membrane_static_friction": threshold,
-                    "static_friction_width": threshold / 10})
+    return Variant(
+        f"coulomb_{threshold:g}",
+        f"coulomb, f_s = {threshold:g} N/cm",
+        {"friction_law": "coulomb"},
+        {"membrane_static_friction": threshold, "static_friction_width": threshold / 10},
+    )
 
 
 VARIANTS: tuple[Variant, ...] = (
     Variant("viscous", "viscous (the paper's)"),
-    _coulomb(3e-5), _coulomb(1e-4), _coulomb(3e-4),
-    Variant("arena", "viscous, in the 100 cm arena",
-            {"energy_terms": [*DEFAULT_COMPONENTS["energy_terms"], "arena"]},
-            {"arena_side": 100.0}),
+    _coulomb(3e-5),
+    _coulomb(1e-4),
+    _coulomb(3e-4),
+    Variant(
+        "arena",
+        "viscous, in the 100 cm arena",
+        {"energy_terms": [*DEFAULT_COMPONENTS["energy_terms"], "arena"]},
+        {"arena_side": 100.0},
+    ),
 )
 
 
@@ -73,8 +83,9 @@ FREE_LONG = (10, 1800.0)
 FREE_SETTINGS = {"open": ([], {}), "arena": (["arena"], {"arena_side": 100.0})}
 
 
-def _free_long(out: Path, seed: int, workers: int | None, overwrite: bool, progress: bool,
-               log) -> None:
+def _free_long(
+    out: Path, seed: int, workers: int | None, overwrite: bool, progress: bool, log
+) -> None:
     from softcell.core.analysis import analyze
     from softcell.core.runconfig import RunConfig
     from softcell.io.netcdf import open_dataset, write_dataset
@@ -83,19 +94,35 @@ def _free_long(out: Path, seed: int, workers: int | None, overwrite: bool, progr
     realizations, duration = FREE_LONG
     for name, (terms, values) in FREE_SETTINGS.items():
         folder = out / "free_bot_long" / name
-        config = RunConfig(parameters={"radius": QUICK.radii[0], "duration": duration,
-                                       **values}).updated(
-            components={**DEFAULT_COMPONENTS, "energy_terms": terms})
-        simulate(config, folder, realizations=realizations, seed=seed,
-                 workers=workers or len(os.sched_getaffinity(0)), membrane=False,
-                 progress=progress, overwrite=overwrite, log=log)
+        config = RunConfig(
+            parameters={"radius": QUICK.radii[0], "duration": duration, **values}
+        ).updated(components={**DEFAULT_COMPONENTS, "energy_terms": terms})
+        simulate(
+            config,
+            folder,
+            realizations=realizations,
+            seed=seed,
+            workers=workers or len(os.sched_getaffinity(0)),
+            membrane=False,
+            progress=progress,
+            overwrite=overwrite,
+            log=log,
+        )
         analysis = analyze(open_dataset(folder), {"discard": QUICK.discard})
         write_dataset(analysis, folder.parent / f"{name}_analysis.nc")
 
 
-def run_variants(out: Path, variants: tuple[Variant, ...], base: Design, *, seed: int,
-                 workers: int | None, overwrite: bool, progress: bool,
-                 log: Callable[[str], None] | None) -> None:
+def run_variants(
+    out: Path,
+    variants: tuple[Variant, ...],
+    base: Design,
+    *,
+    seed: int,
+    workers: int | None,
+    overwrite: bool,
+    progress: bool,
+    log: Callable[[str], None] | None,
+) -> None:
     """Reproduce each variant of ``base`` into ``out/<variant>`` from one root seed; a
     variant that finished there (same design, seed and version) is kept as it is."""
     from softcell.workflows.reproduce import finished
@@ -107,14 +134,29 @@ def run_variants(out: Path, variants: tuple[Variant, ...], base: Design, *, seed
             say(f"variant {i + 1}/{len(variants)}: {variant.label} (finished, kept)")
             continue
         say(f"variant {i + 1}/{len(variants)}: {variant.label}")
-        reproduce(folder, design, seed=seed, workers=workers, overwrite=overwrite,
-                  progress=progress, log=log)
+        reproduce(
+            folder,
+            design,
+            seed=seed,
+            workers=workers,
+            overwrite=overwrite,
+            progress=progress,
+            log=log,
+        )
 
 
-def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = None,
-           variants: tuple[Variant, ...] = VARIANTS, base: Design = QUICK,
-           overwrite: bool = False, progress: bool = True, long_free_bot: bool = True,
-           log: Callable[[str], None] | None = print) -> Path:
+def beyond(
+    out: str | os.PathLike[str],
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    variants: tuple[Variant, ...] = VARIANTS,
+    base: Design = QUICK,
+    overwrite: bool = False,
+    progress: bool = True,
+    long_free_bot: bool = True,
+    log: Callable[[str], None] | None = print,
+) -> Path:
     """Run every variant of ``base`` into ``out/<variant>`` and write the comparison.
 
     Parameters
@@ -137,16 +179,27 @@ def beyond(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = 
     """
     out = Path(out)
     say = log or (lambda _: None)
-    run_variants(out, variants, base, seed=seed, workers=workers, overwrite=overwrite,
-                 progress=progress, log=log)
+    run_variants(
+        out,
+        variants,
+        base,
+        seed=seed,
+        workers=workers,
+        overwrite=overwrite,
+        progress=progress,
+        log=log,
+    )
     if long_free_bot:
-        say(f"the free bot, {FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s, on the open "
-            "floor and in the arena")
+        say(
+            f"the free bot, {FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s, on the open "
+            "floor and in the arena"
+        )
         _free_long(out, seed, workers, overwrite, progress, log)
     return summarize(out, variants)
 
 
 # -- the comparison ---------------------------------------------------------------------------
+
 
 def _cell(ds, name: str) -> np.ndarray:
     return np.asarray(ds[name].sel(body="cell").values, dtype=float)
@@ -159,10 +212,12 @@ def _shape_by_phase(analysis) -> tuple[np.ndarray, np.ndarray]:
 
     ipr = np.asarray(analysis["ipr"].values, dtype=float) - 2 * np.sqrt(np.pi)
     labels = np.asarray(analysis["stopgo_label"].sel(body="cell").values)
-    stop = np.array([np.nanmean(np.where(labels[i] == STOP, ipr[i], np.nan))
-                     for i in range(ipr.shape[0])])
-    go = np.array([np.nanmean(np.where(labels[i] == GO, ipr[i], np.nan))
-                   for i in range(ipr.shape[0])])
+    stop = np.array(
+        [np.nanmean(np.where(labels[i] == STOP, ipr[i], np.nan)) for i in range(ipr.shape[0])]
+    )
+    go = np.array(
+        [np.nanmean(np.where(labels[i] == GO, ipr[i], np.nan)) for i in range(ipr.shape[0])]
+    )
     return stop, go
 
 
@@ -206,9 +261,11 @@ def _free_measure(path: Path) -> dict[str, Any]:
     msd = free["msd"].sel(body="bot")
     msd = msd.isel({d: 0 for d in msd.dims if d != "lag"})
     confined = free["confined_diffusion_coefficient"].sel(body="bot")
-    return {"lag": [float(t) for t in free["lag"].values],
-            "msd": [float(v) for v in np.asarray(msd.values)],
-            "confined_d": float(np.ravel(confined.values)[0])}
+    return {
+        "lag": [float(t) for t in free["lag"].values],
+        "msd": [float(v) for v in np.asarray(msd.values)],
+        "confined_d": float(np.ravel(confined.values)[0]),
+    }
 
 
 def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIANTS) -> Path:
@@ -217,9 +274,11 @@ def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIA
 
     out = Path(out)
     results: dict[str, Any] = {v.name: measure(out / v.name) for v in variants}
-    long = {name: _free_measure(out / "free_bot_long" / f"{name}_analysis.nc")
-            for name in FREE_SETTINGS
-            if (out / "free_bot_long" / f"{name}_analysis.nc").exists()}
+    long = {
+        name: _free_measure(out / "free_bot_long" / f"{name}_analysis.nc")
+        for name in FREE_SETTINGS
+        if (out / "free_bot_long" / f"{name}_analysis.nc").exists()
+    }
     if long:
         results["free_bot_long"] = long
     with atomic_write(out / "beyond.json") as tmp:
@@ -246,8 +305,9 @@ def _figures(folder: Path, variants, results) -> list[str]:
         axes[2].plot(r["radius"], np.array(r["ipr_excess_stop"]), "o-", label=v.label)
     axes[0].set(xlabel="R (cm)", ylabel="<tau_s> (s)", title="mean stop duration (cell)")
     axes[1].set(xlabel="R (cm)", ylabel="<tau_g> (s)", title="mean go duration (cell)")
-    axes[2].set(xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log",
-                title="shape excess during stops")
+    axes[2].set(
+        xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log", title="shape excess during stops"
+    )
     axes[0].legend(fontsize=7)
     fig.savefig(folder / "friction.png", dpi=120)
     plt.close(fig)
@@ -262,11 +322,16 @@ def _figures(folder: Path, variants, results) -> list[str]:
     if "arena" in long:
         lag = np.asarray(long["arena"]["lag"])
         d = long["arena"]["confined_d"]
-        ax.loglog(lag, confined_square_msd(lag, d, 100.0), "k--",
-                  label=f"confined fit, D = {d:.1f} cm2/s")
-        ax.loglog(lag, confined_square_msd(lag, renewal, 100.0), "k:",
-                  label=f"confined formula at the renewal D = {renewal:.2f}")
-        ax.axhline(100.0 ** 2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
+        ax.loglog(
+            lag, confined_square_msd(lag, d, 100.0), "k--", label=f"confined fit, D = {d:.1f} cm2/s"
+        )
+        ax.loglog(
+            lag,
+            confined_square_msd(lag, renewal, 100.0),
+            "k:",
+            label=f"confined formula at the renewal D = {renewal:.2f}",
+        )
+        ax.axhline(100.0**2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
     ax.set(xlabel="lag (s)", ylabel="MSD (cm2)", title="free bot: open floor and 1 m arena")
     ax.legend(fontsize=7)
     fig.savefig(folder / "arena.png", dpi=120)
@@ -279,11 +344,15 @@ def claims(reference: dict[str, Any], variant: dict[str, Any]) -> dict[str, floa
     median over R of the ratio of the IPR excess during stops, the mean ratio of <tau_s> over
     R >= 10 cm, the median ratio of <tau_g>."""
     radius = np.asarray(reference["radius"])
-    ratio = {k: np.asarray(variant[k]) / np.asarray(reference[k])
-             for k in ("ipr_excess_stop", "mean_stop_duration", "mean_go_duration")}
-    return {"stop_shape": float(np.nanmedian(ratio["ipr_excess_stop"])),
-            "stop_large": float(np.nanmean(ratio["mean_stop_duration"][radius >= 10])),
-            "go": float(np.nanmedian(ratio["mean_go_duration"]))}
+    ratio = {
+        k: np.asarray(variant[k]) / np.asarray(reference[k])
+        for k in ("ipr_excess_stop", "mean_stop_duration", "mean_go_duration")
+    }
+    return {
+        "stop_shape": float(np.nanmedian(ratio["ipr_excess_stop"])),
+        "stop_large": float(np.nanmean(ratio["mean_stop_duration"][radius >= 10])),
+        "go": float(np.nanmedian(ratio["mean_go_duration"])),
+    }
 
 
 def _row(cells) -> str:
@@ -312,41 +381,86 @@ def _markdown(variants, results, figures) -> str:
         _row(["---"] * (len(variants) + 1)),
     ]
     for name in base["verdicts"]:
-        lines.append(_row([name, *[results[v.name]["verdicts"].get(name, "-")
-                                   for v in variants]]))
-    lines += ["", "## What static friction is claimed to do", "",
-              f"Radii: {_fmt(radii)} cm.", "",
-              _row(["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops",
-                    "IPR excess, goes"]),
-              _row(["---"] * 5)]
+        lines.append(_row([name, *[results[v.name]["verdicts"].get(name, "-") for v in variants]]))
+    lines += [
+        "",
+        "## What static friction is claimed to do",
+        "",
+        f"Radii: {_fmt(radii)} cm.",
+        "",
+        _row(["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops", "IPR excess, goes"]),
+        _row(["---"] * 5),
+    ]
     for v in variants:
         r = results[v.name]
-        lines.append(_row([v.label, _fmt(r["mean_stop_duration"]), _fmt(r["mean_go_duration"]),
-                           _fmt(r["ipr_excess_stop"], 2), _fmt(r["ipr_excess_go"], 2)]))
-    lines += ["", "Against the paper's model (ratios to `viscous`, same seed):", "",
-              _row(["variant", "IPR excess during stops (median over R)",
-                    "<tau_s> at R >= 10 cm (mean)", "<tau_g> (median over R)"]),
-              _row(["---"] * 4)]
+        lines.append(
+            _row(
+                [
+                    v.label,
+                    _fmt(r["mean_stop_duration"]),
+                    _fmt(r["mean_go_duration"]),
+                    _fmt(r["ipr_excess_stop"], 2),
+                    _fmt(r["ipr_excess_go"], 2),
+                ]
+            )
+        )
+    lines += [
+        "",
+        "Against the paper's model (ratios to `viscous`, same seed):",
+        "",
+        _row(
+            [
+                "variant",
+                "IPR excess during stops (median over R)",
+                "<tau_s> at R >= 10 cm (mean)",
+                "<tau_g> (median over R)",
+            ]
+        ),
+        _row(["---"] * 4),
+    ]
     for v in variants[1:]:
         c = claims(base, results[v.name])
-        lines.append(_row([v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}",
-                           f"{c['go']:.3g}"]))
-    lines += ["", "The paper's claims, read from these columns: static friction keeps the shape "
-              "during stops (first column > 1), lengthens <tau_s> at large R (second > 1) and "
-              "shortens the go phases (third < 1).", "",
-              *[f"![{f}](figures/{f})" for f in figures], ""]
+        lines.append(
+            _row([v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}", f"{c['go']:.3g}"])
+        )
+    lines += [
+        "",
+        "The paper's claims, read from these columns: static friction keeps the shape "
+        "during stops (first column > 1), lengthens <tau_s> at large R (second > 1) and "
+        "shortens the go phases (third < 1).",
+        "",
+        *[f"![{f}](figures/{f})" for f in figures],
+        "",
+    ]
     long = results.get("free_bot_long", {})
     if long:
         renewal = base["free_renewal_d"]
-        lines += ["## The free bot in the arena", "",
-                  f"{FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s of the free bot (rotation "
-                  f"about its centre), whose renewal D is {renewal:.2f} cm2/s; the "
-                  "confined-square formula (L = 100 cm) fitted to its MSD:", "",
-                  _row(["floor", "confined-fit D (cm2/s)", "fit / renewal",
-                        "MSD at the longest lag (cm2)"]), _row(["---"] * 4)]
+        lines += [
+            "## The free bot in the arena",
+            "",
+            f"{FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s of the free bot (rotation "
+            f"about its centre), whose renewal D is {renewal:.2f} cm2/s; the "
+            "confined-square formula (L = 100 cm) fitted to its MSD:",
+            "",
+            _row(
+                ["floor", "confined-fit D (cm2/s)", "fit / renewal", "MSD at the longest lag (cm2)"]
+            ),
+            _row(["---"] * 4),
+        ]
         for name, r in long.items():
-            lines.append(_row([name, f"{r['confined_d']:.2f}",
-                               f"{r['confined_d'] / renewal:.2f}", f"{r['msd'][-1]:.0f}"]))
-        lines += ["", f"L^2 / 3 = {100.0 ** 2 / 3:.0f} cm2 is where the MSD saturates in the "
-                  "arena.", ""]
+            lines.append(
+                _row(
+                    [
+                        name,
+                        f"{r['confined_d']:.2f}",
+                        f"{r['confined_d'] / renewal:.2f}",
+                        f"{r['msd'][-1]:.0f}",
+                    ]
+                )
+            )
+        lines += [
+            "",
+            f"L^2 / 3 = {100.0**2 / 3:.0f} cm2 is where the MSD saturates in the arena.",
+            "",
+        ]
     return "\n".join(lines) + "\n"

@@ -68,12 +68,13 @@ class Calibration:
 
     def summary(self) -> str:
         """Lines for the terminal: the value with unit and uncertainty, the residual per R."""
-        lines = [f"{self.parameter} = {self.value:.4g} ± {self.uncertainty:.2g} {self.unit} "
-                 f"({self.evaluations} simulated evaluations)",
-                 f"  {'R (cm)':>7}  {'measured':>10}  {'simulated':>10}  {'residual':>10}  "
-                 f"{'error':>9}   ({self.quantity}, {self.quantity_unit})"]
-        for r, m, s, e in zip(self.radius, self.measured, self.simulated, self.error,
-                              strict=True):
+        lines = [
+            f"{self.parameter} = {self.value:.4g} ± {self.uncertainty:.2g} {self.unit} "
+            f"({self.evaluations} simulated evaluations)",
+            f"  {'R (cm)':>7}  {'measured':>10}  {'simulated':>10}  {'residual':>10}  "
+            f"{'error':>9}   ({self.quantity}, {self.quantity_unit})",
+        ]
+        for r, m, s, e in zip(self.radius, self.measured, self.simulated, self.error, strict=True):
             lines.append(f"  {r:7g}  {m:10.6g}  {s:10.6g}  {s - m:+10.3g}  {e:9.2g}")
         return "\n".join(lines)
 
@@ -88,8 +89,9 @@ class _Simulator:
         import contextlib
 
         self.stack = contextlib.ExitStack()
-        self.scratch = Path(self.stack.enter_context(tempfile.TemporaryDirectory(
-            prefix="softcell-calibrate-")))
+        self.scratch = Path(
+            self.stack.enter_context(tempfile.TemporaryDirectory(prefix="softcell-calibrate-"))
+        )
         self.workers, self.progress, self.client, self.count = workers, progress, None, 0
 
     def __enter__(self) -> _Simulator:
@@ -109,8 +111,9 @@ class _Simulator:
 
         self.count += 1
         folder = self.scratch / f"evaluation{self.count:03d}"
-        simulate(config, folder, realizations=realizations, seed=seed, client=self.client,
-                 progress=False)
+        simulate(
+            config, folder, realizations=realizations, seed=seed, client=self.client, progress=False
+        )
         return open_dataset(folder).load()
 
 
@@ -124,11 +127,14 @@ def _positive(name: str, values: Sequence[float], unit: str) -> list[float]:
 
 def _common(realizations: int, duration: float, settle: float, workers: int) -> None:
     if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
-        raise SoftcellError(f"realizations = {realizations!r} is not allowed: must be an "
-                            "integer >= 1")
+        raise SoftcellError(
+            f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
+        )
     if not (math.isfinite(duration) and math.isfinite(settle) and 0 <= settle < duration):
-        raise SoftcellError(f"the averaging window [{settle:g}, {duration:g}] s is empty: "
-                            "need 0 <= settle < duration")
+        raise SoftcellError(
+            f"the averaging window [{settle:g}, {duration:g}] s is empty: "
+            "need 0 <= settle < duration"
+        )
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise SoftcellError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
 
@@ -149,8 +155,11 @@ def mean_shape_index(ds, settle: float) -> np.ndarray:
 
     time = np.asarray(ds["time"].values, dtype=float)
     keep = time >= settle
-    ipr = shape_index(np.asarray(ds["membrane_x"].values)[..., keep, :],
-                      np.asarray(ds["membrane_y"].values)[..., keep, :], band_limited=True)
+    ipr = shape_index(
+        np.asarray(ds["membrane_x"].values)[..., keep, :],
+        np.asarray(ds["membrane_y"].values)[..., keep, :],
+        band_limited=True,
+    )
     return ipr.mean(axis=-1)
 
 
@@ -167,11 +176,20 @@ def _default(config: RunConfig, name: str) -> float:
     return float(value)
 
 
-def calibrate_friction(push_speed_value: float, radius: float, *,
-                       config: RunConfig | None = None, push_speed_error: float = 0.0,
-                       realizations: int = 2, duration: float = 15.0, settle: float = 5.0,
-                       seed: int = 0, workers: int = 1, progress: bool = False,
-                       log: Callable[[str], None] | None = None) -> Calibration:
+def calibrate_friction(
+    push_speed_value: float,
+    radius: float,
+    *,
+    config: RunConfig | None = None,
+    push_speed_error: float = 0.0,
+    realizations: int = 2,
+    duration: float = 15.0,
+    settle: float = 5.0,
+    seed: int = 0,
+    workers: int = 1,
+    progress: bool = False,
+    log: Callable[[str], None] | None = None,
+) -> Calibration:
     """gamma_mem (N s cm-2) that gives a constantly pushed cell of radius ``radius`` (cm)
     the mean GC speed ``push_speed_value`` (cm/s), time-averaged over [``settle``,
     ``duration``] s.
@@ -187,28 +205,39 @@ def calibrate_friction(push_speed_value: float, radius: float, *,
     (v_meas,) = _positive("push speed", [push_speed_value], "cm s-1")
     (radius,) = _positive("radius", [radius], "cm")
     if push_speed_error < 0 or not math.isfinite(push_speed_error):
-        raise SoftcellError(f"push speed error = {push_speed_error:g} cm s-1 is not allowed: "
-                            "must be finite and >= 0")
+        raise SoftcellError(
+            f"push speed error = {push_speed_error:g} cm s-1 is not allowed: "
+            "must be finite and >= 0"
+        )
     _common(realizations, duration, settle, workers)
     f0, gamma_t = _default(config, "drive_force"), _default(config, "bot_friction")
     if v_meas >= f0 / gamma_t:
-        raise SoftcellError(f"push speed {v_meas:g} cm/s is not below the free bot's F0 / "
-                            f"gamma_T = {f0 / gamma_t:.4g} cm/s: no membrane friction gives it")
+        raise SoftcellError(
+            f"push speed {v_meas:g} cm/s is not below the free bot's F0 / "
+            f"gamma_T = {f0 / gamma_t:.4g} cm/s: no membrane friction gives it"
+        )
     # The whole ring sliding with the bot: F0 = (gamma_T + gamma_mem 2 pi R) v.
     guess = (f0 / v_meas - gamma_t) / (2 * math.pi * radius)
-    base = config.updated(parameters={"radius": radius, "duration": duration},
-                          components={"driving_protocol": "constant_push"})
+    base = config.updated(
+        parameters={"radius": radius, "duration": duration},
+        components={"driving_protocol": "constant_push"},
+    )
     say = log or (lambda _: None)
     cache: dict[float, np.ndarray] = {}
 
     with _Simulator(workers, progress) as run:
+
         def speeds(log_gamma: float) -> np.ndarray:
             if log_gamma not in cache:
                 gamma = math.exp(log_gamma)
-                cache[log_gamma] = push_speed(run(base.updated(
-                    parameters={"membrane_friction": gamma}), realizations, seed), settle)
-                say(f"gamma_mem = {gamma:.5g} N s cm-2: mean push speed "
-                    f"{cache[log_gamma].mean():.5g} cm/s")
+                cache[log_gamma] = push_speed(
+                    run(base.updated(parameters={"membrane_friction": gamma}), realizations, seed),
+                    settle,
+                )
+                say(
+                    f"gamma_mem = {gamma:.5g} N s cm-2: mean push speed "
+                    f"{cache[log_gamma].mean():.5g} cm/s"
+                )
             return cache[log_gamma]
 
         def gap(log_gamma: float) -> float:
@@ -223,9 +252,11 @@ def calibrate_friction(push_speed_value: float, radius: float, *,
             else:
                 break
         else:
-            raise SoftcellError(f"no gamma_mem in [{math.exp(lo):.3g}, {math.exp(hi):.3g}] "
-                                f"N s cm-2 gives a push speed of {v_meas:g} cm/s at R = "
-                                f"{radius:g} cm")
+            raise SoftcellError(
+                f"no gamma_mem in [{math.exp(lo):.3g}, {math.exp(hi):.3g}] "
+                f"N s cm-2 gives a push speed of {v_meas:g} cm/s at R = "
+                f"{radius:g} cm"
+            )
         log_gamma = brentq(gap, lo, hi, xtol=ROOT_TOLERANCE)
         gamma = math.exp(log_gamma)
         step = math.log1p(SLOPE_STEP)
@@ -235,19 +266,41 @@ def calibrate_friction(push_speed_value: float, radius: float, *,
         # The search's own tolerance is the floor (the push itself is deterministic).
         uncertainty = gamma * math.hypot(error / abs(slope), ROOT_TOLERANCE)
         return Calibration(
-            "membrane_friction", "N s cm-2", gamma, uncertainty,
-            "time-averaged GC speed of the pushed cell", "cm s-1", [radius], [v_meas],
-            [float(at.mean())], [error], run.count,
-            {"realizations": realizations, "duration": duration, "settle": settle,
-             "seed": seed, "push_speed_error": push_speed_error})
+            "membrane_friction",
+            "N s cm-2",
+            gamma,
+            uncertainty,
+            "time-averaged GC speed of the pushed cell",
+            "cm s-1",
+            [radius],
+            [v_meas],
+            [float(at.mean())],
+            [error],
+            run.count,
+            {
+                "realizations": realizations,
+                "duration": duration,
+                "settle": settle,
+                "seed": seed,
+                "push_speed_error": push_speed_error,
+            },
+        )
 
 
-def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
-                      config: RunConfig | None = None,
-                      ipr_error: Sequence[float] | None = None, realizations: int = 4,
-                      duration: float = 120.0, settle: float = 15.0, seed: int = 0,
-                      workers: int = 1, progress: bool = False,
-                      log: Callable[[str], None] | None = None) -> Calibration:
+def calibrate_bending(
+    ipr: Sequence[float],
+    radius: Sequence[float],
+    *,
+    config: RunConfig | None = None,
+    ipr_error: Sequence[float] | None = None,
+    realizations: int = 4,
+    duration: float = 120.0,
+    settle: float = 15.0,
+    seed: int = 0,
+    workers: int = 1,
+    progress: bool = False,
+    log: Callable[[str], None] | None = None,
+) -> Calibration:
     """k (N cm2) that gives the run-and-tumble cell the measured time-averaged IPR ``ipr``
     (1) at the radii ``radius`` (cm): a root at one radius, the least-squares fit (residuals
     weighed by their errors) at several.
@@ -263,17 +316,21 @@ def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
     ipr = _positive("IPR", ipr, "1")
     radius = _positive("radius", radius, "cm")
     if len(ipr) != len(radius):
-        raise SoftcellError(f"{len(ipr)} IPR value(s) for {len(radius)} radius value(s): give "
-                            "one IPR per radius")
+        raise SoftcellError(
+            f"{len(ipr)} IPR value(s) for {len(radius)} radius value(s): give one IPR per radius"
+        )
     circle = 2 * math.sqrt(math.pi)
     low = [v for v in ipr if v <= circle]
     if low:
-        raise SoftcellError(f"IPR = {low[0]:g} is not allowed: a closed curve's IPR is at "
-                            f"least a circle's 2 sqrt(pi) = {circle:.5f}")
+        raise SoftcellError(
+            f"IPR = {low[0]:g} is not allowed: a closed curve's IPR is at "
+            f"least a circle's 2 sqrt(pi) = {circle:.5f}"
+        )
     errors = [0.0] * len(ipr) if ipr_error is None else [float(e) for e in ipr_error]
     if len(errors) != len(ipr) or any(not (math.isfinite(e) and e >= 0) for e in errors):
-        raise SoftcellError(f"IPR errors {errors} are not allowed: one finite value >= 0 per "
-                            "radius")
+        raise SoftcellError(
+            f"IPR errors {errors} are not allowed: one finite value >= 0 per radius"
+        )
     _common(realizations, duration, settle, workers)
     k0 = _default(config, "bending_stiffness")
     measured = np.asarray(ipr)
@@ -281,14 +338,31 @@ def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
     cache: dict[float, list[np.ndarray]] = {}
 
     with _Simulator(workers, progress) as run:
+
         def values(log_k: float) -> list[np.ndarray]:
             if log_k not in cache:
                 k = math.exp(log_k)
-                cache[log_k] = [mean_shape_index(run(config.updated(parameters={
-                    "radius": r, "duration": duration, "bending_stiffness": k}),
-                    realizations, seed), settle) for r in radius]
-                say(f"k = {k:.5g} N cm2: mean IPR " + ", ".join(
-                    f"{v.mean():.6f}" for v in cache[log_k]))
+                cache[log_k] = [
+                    mean_shape_index(
+                        run(
+                            config.updated(
+                                parameters={
+                                    "radius": r,
+                                    "duration": duration,
+                                    "bending_stiffness": k,
+                                }
+                            ),
+                            realizations,
+                            seed,
+                        ),
+                        settle,
+                    )
+                    for r in radius
+                ]
+                say(
+                    f"k = {k:.5g} N cm2: mean IPR "
+                    + ", ".join(f"{v.mean():.6f}" for v in cache[log_k])
+                )
             return cache[log_k]
 
         def residual(log_k: float) -> np.ndarray:
@@ -306,44 +380,76 @@ def calibrate_bending(ipr: Sequence[float], radius: Sequence[float], *,
                 raise SoftcellError(
                     f"IPR = {ipr[0]:g} at R = {radius[0]:g} cm is out of reach for k in "
                     f"[{k0 / 30:.3g}, {k0 * 30:.3g}] N cm2 (simulated {r_hi + ipr[0]:.6f} to "
-                    f"{r_lo + ipr[0]:.6f})")
+                    f"{r_lo + ipr[0]:.6f})"
+                )
             log_k = brentq(lambda x: residual(x)[0], lo, hi, xtol=ROOT_TOLERANCE)
         else:
+
             def cost(x: float) -> float:
                 return float(np.sum((residual(x) / weights(x)) ** 2))
 
-            log_k = float(minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                                          options={"xatol": FIT_TOLERANCE}).x)
+            log_k = float(
+                minimize_scalar(
+                    cost, bounds=(lo, hi), method="bounded", options={"xatol": FIT_TOLERANCE}
+                ).x
+            )
             if min(log_k - lo, hi - log_k) < 0.01:
-                raise SoftcellError(f"the best k lies at the edge of [{k0 / 30:.3g}, "
-                                    f"{k0 * 30:.3g}] N cm2: the IPR values are out of reach")
+                raise SoftcellError(
+                    f"the best k lies at the edge of [{k0 / 30:.3g}, "
+                    f"{k0 * 30:.3g}] N cm2: the IPR values are out of reach"
+                )
         step = math.log1p(SLOPE_STEP)
         slope = (residual(log_k + step) - residual(log_k - step)) / (2 * step)  # per ln k
         at = values(log_k)
         err = np.hypot(np.asarray(errors), [_sem(v) for v in at])
         information = float(np.sum((slope[err > 0] / err[err > 0]) ** 2))
-        sigma_log = math.hypot(1.0 / math.sqrt(information) if information > 0 else 0.0,
-                               ROOT_TOLERANCE if len(radius) == 1 else FIT_TOLERANCE)
+        sigma_log = math.hypot(
+            1.0 / math.sqrt(information) if information > 0 else 0.0,
+            ROOT_TOLERANCE if len(radius) == 1 else FIT_TOLERANCE,
+        )
         k = math.exp(log_k)
         return Calibration(
-            "bending_stiffness", "N cm2", k, k * sigma_log, "time-averaged IPR", "1",
-            radius, [float(v) for v in measured], [float(v.mean()) for v in at],
+            "bending_stiffness",
+            "N cm2",
+            k,
+            k * sigma_log,
+            "time-averaged IPR",
+            "1",
+            radius,
+            [float(v) for v in measured],
+            [float(v.mean()) for v in at],
             [float(e) for e in err],
-            run.count, {"realizations": realizations, "duration": duration, "settle": settle,
-                        "seed": seed, "ipr_error": errors})
+            run.count,
+            {
+                "realizations": realizations,
+                "duration": duration,
+                "settle": settle,
+                "seed": seed,
+                "ipr_error": errors,
+            },
+        )
 
 
-def write_calibration(results: Sequence[Calibration], path: str | os.PathLike[str],
-                      config: RunConfig) -> Path:
+def write_calibration(
+    results: Sequence[Calibration], path: str | os.PathLike[str], config: RunConfig
+) -> Path:
     """The calibrations as JSON at ``path``, with the configuration and the version."""
     from softcell._version import __version__
     from softcell.io.files import atomic_write
 
     path = Path(path)
     with atomic_write(path) as tmp:
-        tmp.write_text(json.dumps({
-            "softcell_version": __version__, "parameters": config.parameters,
-            "components": config.components,
-            "calibrations": [c.to_dict() for c in results]}, indent=1) + "\n",
-            encoding="utf-8")
+        tmp.write_text(
+            json.dumps(
+                {
+                    "softcell_version": __version__,
+                    "parameters": config.parameters,
+                    "components": config.components,
+                    "calibrations": [c.to_dict() for c in results],
+                },
+                indent=1,
+            )
+            + "\n",
+            encoding="utf-8",
+        )
     return path

@@ -68,8 +68,13 @@ class Task:
         """Every setting a file or checkpoint of this task must have been made with, in the
         order they are compared: each parameter, the components, seed, spawn key, version."""
         params = json.loads(Parameters(self.values, extra_specs).to_attrs()["softcell_parameters"])
-        return _request(params, self.stored_components, self.seed,
-                        f"{self.point},{self.realization}", __version__)
+        return _request(
+            params,
+            self.stored_components,
+            self.seed,
+            f"{self.point},{self.realization}",
+            __version__,
+        )
 
 
 def bot_terms(names: Iterable[str]) -> list[str]:
@@ -80,11 +85,16 @@ def bot_terms(names: Iterable[str]) -> list[str]:
     return [n for n in names if registry.get("energy_term", n).acts_on_bot]
 
 
-def _request(parameters: dict[str, Any], components: dict[str, Any], seed: Any,
-             spawn_key: Any, version: Any) -> dict[str, Any]:
-    return {**{f"parameter {k}": v for k, v in parameters.items()},
-            **{f"component {k}": v for k, v in sorted(components.items())},
-            "seed": seed, "spawn key": spawn_key, "softcell version": version}
+def _request(
+    parameters: dict[str, Any], components: dict[str, Any], seed: Any, spawn_key: Any, version: Any
+) -> dict[str, Any]:
+    return {
+        **{f"parameter {k}": v for k, v in parameters.items()},
+        **{f"component {k}": v for k, v in sorted(components.items())},
+        "seed": seed,
+        "spawn key": spawn_key,
+        "softcell version": version,
+    }
 
 
 class FileCheckpoint:
@@ -99,23 +109,45 @@ class FileCheckpoint:
             return None
         data = read_checkpoint(self.path)
         if data["request"] != self.fingerprint:
-            raise SoftcellError(f"checkpoint {self.path} was made for another request; "
-                                "remove it or rerun with --overwrite")
-        return Saved(int(data["next_sample"]), data["modes_record"], data["pose_record"],
-                     {k.removeprefix("state_"): v for k, v in data.items()
-                      if k.startswith("state_")})
+            raise SoftcellError(
+                f"checkpoint {self.path} was made for another request; "
+                "remove it or rerun with --overwrite"
+            )
+        return Saved(
+            int(data["next_sample"]),
+            data["modes_record"],
+            data["pose_record"],
+            {k.removeprefix("state_"): v for k, v in data.items() if k.startswith("state_")},
+        )
 
     def save(self, saved: Saved) -> None:
-        _save_checkpoint(self.path, self.fingerprint, saved.next_sample, saved.modes_record,
-                         saved.pose_record, saved.state)
+        _save_checkpoint(
+            self.path,
+            self.fingerprint,
+            saved.next_sample,
+            saved.modes_record,
+            saved.pose_record,
+            saved.state,
+        )
 
 
-def _save_checkpoint(path: Path, request: str, next_sample: int, rec_modes: np.ndarray,
-                     rec_pose: np.ndarray, state: dict[str, np.ndarray]) -> None:
+def _save_checkpoint(
+    path: Path,
+    request: str,
+    next_sample: int,
+    rec_modes: np.ndarray,
+    rec_pose: np.ndarray,
+    state: dict[str, np.ndarray],
+) -> None:
     with atomic_write(path) as tmp:
-        np.savez(tmp, request=np.array(request), next_sample=np.array(next_sample),
-                 modes_record=rec_modes[:next_sample], pose_record=rec_pose[:next_sample],
-                 **{f"state_{k}": v for k, v in state.items()})
+        np.savez(
+            tmp,
+            request=np.array(request),
+            next_sample=np.array(next_sample),
+            modes_record=rec_modes[:next_sample],
+            pose_record=rec_pose[:next_sample],
+            **{f"state_{k}": v for k, v in state.items()},
+        )
 
 
 def read_checkpoint(path: Path) -> dict[str, Any]:
@@ -126,9 +158,11 @@ def read_checkpoint(path: Path) -> dict[str, Any]:
         data["request"] = str(data.get("request", ""))
         int(data["next_sample"])
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
-        raise SoftcellError(f"checkpoint {path} is unreadable (truncated or corrupt: "
-                            f"{type(exc).__name__}); rerun with --overwrite to start that "
-                            "realization again") from None
+        raise SoftcellError(
+            f"checkpoint {path} is unreadable (truncated or corrupt: "
+            f"{type(exc).__name__}); rerun with --overwrite to start that "
+            "realization again"
+        ) from None
     return data
 
 
@@ -139,9 +173,13 @@ def _model_and_stepper(task: Task, extra_specs) -> tuple[Model, Stepper]:
     key = json.dumps([task.values, task.components, task.membrane], sort_keys=True)
     if key not in _BUILT:
         params = Parameters(task.values, extra_specs)
-        model = build_model(params, task.components["energy_terms"],
-                            task.components["driving_protocol"], membrane=task.membrane,
-                            friction_law=task.components.get("friction_law", "viscous"))
+        model = build_model(
+            params,
+            task.components["energy_terms"],
+            task.components["driving_protocol"],
+            membrane=task.membrane,
+            friction_law=task.components.get("friction_law", "viscous"),
+        )
         integrator = build_integrator(task.components["integrator"], params)
         _BUILT[key] = (model, integrator.build(model))
     return _BUILT[key]
@@ -154,9 +192,12 @@ STOP_FILE = ".softcell-stop"
 STOP_GRACE = 30.0
 
 
-def run_task(task: Task, progress: Callable[[float], None] | None = None,
-             checkpoint_every: float = CHECKPOINT_EVERY, stoppable: bool = False
-             ) -> str | None:
+def run_task(
+    task: Task,
+    progress: Callable[[float], None] | None = None,
+    checkpoint_every: float = CHECKPOINT_EVERY,
+    stoppable: bool = False,
+) -> str | None:
     """Run one (point, realization) and write its file atomically; returns the path.
 
     With ``stoppable`` (on a cluster), :data:`STOP_FILE` appearing beside the file makes the
@@ -174,26 +215,39 @@ def run_task(task: Task, progress: Callable[[float], None] | None = None,
     stop_file = path.parent / STOP_FILE
     try:
         record = run_realization(
-            model, stepper, realization_rng(task.seed, task.point, task.realization),
-            label=task.name, checkpoint=FileCheckpoint(checkpoint, _canonical(task.request(specs))),
-            checkpoint_every=checkpoint_every, progress=progress,
-            stop=stop_file.exists if stoppable else None)
+            model,
+            stepper,
+            realization_rng(task.seed, task.point, task.realization),
+            label=task.name,
+            checkpoint=FileCheckpoint(checkpoint, _canonical(task.request(specs))),
+            checkpoint_every=checkpoint_every,
+            progress=progress,
+            stop=stop_file.exists if stoppable else None,
+        )
     except Interrupted:
         if not stoppable:
             raise
         return None  # asked to stop: the checkpoint is saved
-    ds = record_dataset(record, model, realization=task.realization, seed=task.seed,
-                        components=task.stored_components,
-                        extra_attrs={"softcell_point": task.point,
-                                     "softcell_spawn_key": f"{task.point},{task.realization}"},
-                        scalar_coords=task.swept)
+    ds = record_dataset(
+        record,
+        model,
+        realization=task.realization,
+        seed=task.seed,
+        components=task.stored_components,
+        extra_attrs={
+            "softcell_point": task.point,
+            "softcell_spawn_key": f"{task.point},{task.realization}",
+        },
+        scalar_coords=task.swept,
+    )
     write_dataset(ds, path)
     checkpoint.unlink(missing_ok=True)
     return str(path)
 
 
-def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
-         membrane: bool = True) -> list[Task]:
+def plan(
+    config: RunConfig, out: Path, *, realizations: int, seed: int, membrane: bool = True
+) -> list[Task]:
     """The tasks of an ensemble, one per (parameter point, realization), in order.
 
     Everything is checked here, before anything is computed: the component names, every
@@ -203,8 +257,9 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
     from softcell.core.plugin.registry import get_registry
 
     if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
-        raise SoftcellError(f"realizations = {realizations!r} is not allowed: must be an "
-                            "integer >= 1")
+        raise SoftcellError(
+            f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
+        )
     check_seed(seed)
     config.check_components()
     registry = get_registry()
@@ -213,13 +268,26 @@ def plan(config: RunConfig, out: Path, *, realizations: int, seed: int,
     for _, params in points:
         check_run(params)
         integrator.check(params)
-    swept = tuple(dict.fromkeys(["radius", *(k for k, v in config.parameters.items()
-                                             if isinstance(v, list | tuple))]))
+    swept = tuple(
+        dict.fromkeys(
+            ["radius", *(k for k, v in config.parameters.items() if isinstance(v, list | tuple))]
+        )
+    )
     tasks = []
     for p, (_, params) in enumerate(points):
         for r in range(realizations):
-            tasks.append(Task(p, r, dict(params.given), dict(config.components), seed, membrane,
-                              str(out / f"point{p:03d}_realization{r:04d}.nc"), swept))
+            tasks.append(
+                Task(
+                    p,
+                    r,
+                    dict(params.given),
+                    dict(config.components),
+                    seed,
+                    membrane,
+                    str(out / f"point{p:03d}_realization{r:04d}.nc"),
+                    swept,
+                )
+            )
     return tasks
 
 
@@ -267,10 +335,13 @@ def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
         if found:
             raise SoftcellError(f"it does not follow the simulation schema ({found[0]})")
         a = ds.attrs
-        return _request(json.loads(a["softcell_parameters"]),
-                        json.loads(a["softcell_components"]), int(a["softcell_seed"]),
-                        str(a.get("softcell_spawn_key")), a.get("softcell_version")
-                        ), np.asarray(ds["time"].values)
+        return _request(
+            json.loads(a["softcell_parameters"]),
+            json.loads(a["softcell_components"]),
+            int(a["softcell_seed"]),
+            str(a.get("softcell_spawn_key")),
+            a.get("softcell_version"),
+        ), np.asarray(ds["time"].values)
 
 
 def _reuse_problem(path: Path, wanted: dict[str, Any], times: np.ndarray) -> str | None:
@@ -298,8 +369,10 @@ class Resume:
 
 
 def _overwrite_hint(path: Path, why: str) -> SoftcellError:
-    return SoftcellError(f"{path} {why}; rerun with --overwrite to recompute it (and every "
-                         "other file that does not match), or write to another directory")
+    return SoftcellError(
+        f"{path} {why}; rerun with --overwrite to recompute it (and every "
+        "other file that does not match), or write to another directory"
+    )
 
 
 def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Resume:
@@ -343,13 +416,18 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
                 resume.remove.append(checkpoint)
         resume.todo.append(task)
     planned = {Path(t.path).name for t in tasks}
-    stray = sorted(p for p in out.glob("*.nc") if p.name not in planned
-                   and not p.name.startswith(".") and kind_of(p) == "simulation")
+    stray = sorted(
+        p
+        for p in out.glob("*.nc")
+        if p.name not in planned and not p.name.startswith(".") and kind_of(p) == "simulation"
+    )
     if stray and not overwrite:
-        raise SoftcellError(f"{out} holds {len(stray)} simulation file(s) that are no part of "
-                            f"this request (e.g. {stray[0].name}), which would be read as part "
-                            "of the sweep; rerun with --overwrite to remove them, or write to "
-                            "another directory")
+        raise SoftcellError(
+            f"{out} holds {len(stray)} simulation file(s) that are no part of "
+            f"this request (e.g. {stray[0].name}), which would be read as part "
+            "of the sweep; rerun with --overwrite to remove them, or write to "
+            "another directory"
+        )
     resume.remove.extend(stray)
     return resume
 
@@ -360,11 +438,21 @@ def expected_bytes(tasks: list[Task]) -> int:
     return sum(file_bytes(Parameters(t.values, specs)) for t in tasks)
 
 
-def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: int = 1,
-             seed: int = 0, workers: int = 1, scheduler: str | None = None,
-             client: Any = None, membrane: bool = True, progress: bool = True,
-             checkpoint_every: float = CHECKPOINT_EVERY, overwrite: bool = False,
-             log: Callable[[str], None] | None = None) -> list[Path]:
+def simulate(
+    config: RunConfig,
+    out: str | os.PathLike[str],
+    *,
+    realizations: int = 1,
+    seed: int = 0,
+    workers: int = 1,
+    scheduler: str | None = None,
+    client: Any = None,
+    membrane: bool = True,
+    progress: bool = True,
+    checkpoint_every: float = CHECKPOINT_EVERY,
+    overwrite: bool = False,
+    log: Callable[[str], None] | None = None,
+) -> list[Path]:
     """Run an ensemble: every parameter point of ``config`` x ``realizations``.
 
     Parameters take the units of ``softcell params`` (cm, s, rad, N); each file stores
@@ -410,11 +498,15 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise SoftcellError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
     if sum([scheduler is not None, workers != 1, client is not None]) > 1:
-        raise SoftcellError(f"workers = {workers}, scheduler = {scheduler!r} and a client "
-                            "exclude each other: give one")
+        raise SoftcellError(
+            f"workers = {workers}, scheduler = {scheduler!r} and a client "
+            "exclude each other: give one"
+        )
     if not (isinstance(checkpoint_every, int | float) and 0 <= checkpoint_every < math.inf):
-        raise SoftcellError(f"checkpoint_every = {checkpoint_every} s is not allowed: must be "
-                            "finite and >= 0 s (0: after every chunk of samples)")
+        raise SoftcellError(
+            f"checkpoint_every = {checkpoint_every} s is not allowed: must be "
+            "finite and >= 0 s (0: after every chunk of samples)"
+        )
     out = check_output(out, "simulation", directory=True)  # absolute: cluster workers too
     tasks = plan(config, out, realizations=realizations, seed=seed, membrane=membrane)
     resume = resume_plan(tasks, out, overwrite=overwrite)
@@ -423,18 +515,25 @@ def simulate(config: RunConfig, out: str | os.PathLike[str], *, realizations: in
         check_scheduler(scheduler)
     if resume.remove and log:
         names = [p.name for p in resume.remove]
-        log(f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
-            f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})")
+        log(
+            f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
+            f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})"
+        )
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     out.mkdir(parents=True, exist_ok=True)
     todo = resume.todo
     total = sum(_duration(t) for t in todo)
     # smoothing=0: the ETA from the average rate since the start, not the last few updates
-    with tqdm(total=total, unit="sim s", disable=not progress or not todo, unit_scale=False,
-              smoothing=0,
-              bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} sim s "
-                         "[{elapsed}<{remaining}]",
-              desc=f"{len(todo)} realizations") as bar:
+    with tqdm(
+        total=total,
+        unit="sim s",
+        disable=not progress or not todo,
+        unit_scale=False,
+        smoothing=0,
+        bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} sim s "
+        "[{elapsed}<{remaining}]",
+        desc=f"{len(todo)} realizations",
+    ) as bar:
         if client is not None:
             run_on_cluster(todo, client, bar.update, checkpoint_every)
         elif scheduler is None and workers == 1:
@@ -463,8 +562,9 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
         try:
             client = Client(scheduler, timeout="30s")
         except OSError as exc:
-            raise SoftcellError(f"cannot reach the dask scheduler at {scheduler!r}: {exc}"
-                                ) from None
+            raise SoftcellError(
+                f"cannot reach the dask scheduler at {scheduler!r}: {exc}"
+            ) from None
         with client:
             yield client
         return
@@ -473,8 +573,13 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
     # ignore SIGINT, which a terminal sends the whole process group: this process handles
     # Ctrl-C, cancels the tasks and closes the cluster in order.
     with _sigint_ignored_by_children():
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     with cluster, Client(cluster) as client:
         yield client
 
@@ -496,8 +601,12 @@ def _sigint_ignored_by_children() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
-def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] | None = None,
-                   checkpoint_every: float = CHECKPOINT_EVERY) -> list[str]:
+def run_on_cluster(
+    tasks: list[Task],
+    client,
+    progress: Callable[[float], None] | None = None,
+    checkpoint_every: float = CHECKPOINT_EVERY,
+) -> list[str]:
     """Run ``tasks`` on a dask.distributed ``client``, one task per realization; each writes
     its own file atomically. ``progress`` is called with a task's simulated seconds when it
     ends. The longest tasks start first. The first failure cancels what has not started and
@@ -507,9 +616,18 @@ def run_on_cluster(tasks: list[Task], client, progress: Callable[[float], None] 
 
     # Longest first (priority = simulated seconds): a long realization submitted last would
     # run alone on one worker at the end while the others idle.
-    futures = {client.submit(run_task, task, None, checkpoint_every, True, pure=False,
-                             priority=int(math.ceil(_duration(task)))): task
-               for task in tasks}
+    futures = {
+        client.submit(
+            run_task,
+            task,
+            None,
+            checkpoint_every,
+            True,
+            pure=False,
+            priority=int(math.ceil(_duration(task))),
+        ): task
+        for task in tasks
+    }
     paths = []
     try:
         for future in as_completed(futures):
@@ -557,11 +675,15 @@ def _where(unfinished: list[Task], finished: int, total: int) -> str:
             data = None
         if data is not None:
             last = int(data["next_sample"]) - 1
-            saved.append(f"t = {float(sample_times(Parameters(task.values, _specs()))[last]):.2f}"
-                         f" s of {task.name}")
+            saved.append(
+                f"t = {float(sample_times(Parameters(task.values, _specs()))[last]):.2f}"
+                f" s of {task.name}"
+            )
     where = ", ".join(saved) if saved else "t = 0 s of every unfinished realization"
-    return (f"interrupted at {where} ({finished} of {total} realizations finished); rerun the "
-            "same command to resume")
+    return (
+        f"interrupted at {where} ({finished} of {total} realizations finished); rerun the "
+        "same command to resume"
+    )
 
 
 def _specs() -> list[ParameterSpec]:
@@ -586,15 +708,21 @@ def check_scheduler(address: str) -> None:
     except ValueError:
         host = port = None
         parts = None
-    if parts is None or parts.scheme not in SCHEDULER_SCHEMES or (
-            parts.scheme != "inproc" and (not host or port is None)):
-        raise SoftcellError(f"scheduler address {address!r} is not allowed: must be "
-                            "SCHEME://HOST:PORT with SCHEME one of "
-                            f"{', '.join(SCHEDULER_SCHEMES)} (e.g. tcp://10.0.0.5:8786)")
+    if (
+        parts is None
+        or parts.scheme not in SCHEDULER_SCHEMES
+        or (parts.scheme != "inproc" and (not host or port is None))
+    ):
+        raise SoftcellError(
+            f"scheduler address {address!r} is not allowed: must be "
+            "SCHEME://HOST:PORT with SCHEME one of "
+            f"{', '.join(SCHEDULER_SCHEMES)} (e.g. tcp://10.0.0.5:8786)"
+        )
     if parts.scheme == "inproc":
         return
     try:
         socket.create_connection((host, port), timeout=5).close()
     except OSError as exc:
-        raise SoftcellError(f"cannot reach the dask scheduler at {address!r}: "
-                            f"{exc.strerror or exc}") from None
+        raise SoftcellError(
+            f"cannot reach the dask scheduler at {address!r}: {exc.strerror or exc}"
+        ) from None

@@ -32,9 +32,16 @@ class VideoDesign:
     blur: float = 1.0  # px
 
 
-def experimental_pipeline(simulation: Path, folder: Path, video: VideoDesign, *,
-                          discard: float, seed: int, progress: bool = False,
-                          keep_film: bool = False) -> dict[str, Any]:
+def experimental_pipeline(
+    simulation: Path,
+    folder: Path,
+    video: VideoDesign,
+    *,
+    discard: float,
+    seed: int,
+    progress: bool = False,
+    keep_film: bool = False,
+) -> dict[str, Any]:
     """Film the simulation file ``simulation`` from ``discard`` s on, track the film, and
     analyse it as the paper analyses experiments (threshold 0.3 cm/s), beside the simulation's
     own analysis of the same span (at the simulations' 0.03 cm/s and at 0.3 cm/s).
@@ -52,33 +59,60 @@ def experimental_pipeline(simulation: Path, folder: Path, video: VideoDesign, *,
     start, end = discard, discard + v.span
     last = float(simulated["time"].values[-1])
     if end > last:
-        raise SoftcellError(f"the video span [{start:g}, {end:g}] s exceeds the record "
-                            f"(0 .. {last:g} s)")
+        raise SoftcellError(
+            f"the video span [{start:g}, {end:g}] s exceeds the record (0 .. {last:g} s)"
+        )
     noise_seed = int(np.random.SeedSequence(seed, spawn_key=(VIDEO_STREAM,)).generate_state(1)[0])
     movie = folder / "cell.mkv"
-    info = render(simulated, movie, px_per_cm=v.px_per_cm, fps=v.fps, start=start, end=end,
-                  noise=v.noise, blur=v.blur, seed=noise_seed, progress=progress)
+    info = render(
+        simulated,
+        movie,
+        px_per_cm=v.px_per_cm,
+        fps=v.fps,
+        start=start,
+        end=end,
+        noise=v.noise,
+        blur=v.blur,
+        seed=noise_seed,
+        progress=progress,
+    )
     frame = info.frame
-    tracked = track(movie, px_per_cm=v.px_per_cm, origin=(frame.x0, frame.y0), fps=v.fps,
-                    radius=v.radius, progress=progress)
+    tracked = track(
+        movie,
+        px_per_cm=v.px_per_cm,
+        origin=(frame.x0, frame.y0),
+        fps=v.fps,
+        radius=v.radius,
+        progress=progress,
+    )
     size_mb = movie.stat().st_size / 1e6
     if not keep_film:
         movie.unlink()  # lossless and noisy: hundreds of MB, remade byte for byte on demand
-    notes = [*info.notes, f"the film ({size_mb:.0f} MB, lossless FFV1) was "
-             + ("kept as video/cell.mkv" if keep_film else "deleted after tracking")
-             + f"; `softcell render {simulation} -o cell.mkv --px-per-cm {v.px_per_cm:g} "
-             f"--fps {v.fps:g} --start {start:g} --end {end:g} --noise {v.noise:g} --blur "
-             f"{v.blur:g} --seed {noise_seed}` remakes it"]
+    notes = [
+        *info.notes,
+        f"the film ({size_mb:.0f} MB, lossless FFV1) was "
+        + ("kept as video/cell.mkv" if keep_film else "deleted after tracking")
+        + f"; `softcell render {simulation} -o cell.mkv --px-per-cm {v.px_per_cm:g} "
+        f"--fps {v.fps:g} --start {start:g} --end {end:g} --noise {v.noise:g} --blur "
+        f"{v.blur:g} --seed {noise_seed}` remakes it",
+    ]
     write_dataset(tracked, folder / "tracked.nc")
     write_dataset(analyze(tracked, {"discard": 0.0}), folder / "tracked_analysis.nc")
     span = simulated.sel(time=slice(start - 1e-9, end + 1e-9))
     span = span.assign_coords(time=span["time"] - span["time"][0])
     span["time"].attrs.update(simulated["time"].attrs)
     write_dataset(analyze(span, {"discard": 0.0}), folder / "simulated_analysis.nc")
-    write_dataset(analyze(span, {"discard": 0.0, "threshold": 0.3}),
-                  folder / "simulated_analysis_0.3.nc")
-    return {"radius": v.radius, "span": [start, end], "noise_seed": noise_seed,
-            "design": asdict(v), "frames": int(info.times.size),
-            "size_px": [frame.width, frame.height],
-            "tracking_summary": json.loads(tracked.attrs["softcell_tracking_summary"]),
-            "source": str(simulation), "notes": notes}
+    write_dataset(
+        analyze(span, {"discard": 0.0, "threshold": 0.3}), folder / "simulated_analysis_0.3.nc"
+    )
+    return {
+        "radius": v.radius,
+        "span": [start, end],
+        "noise_seed": noise_seed,
+        "design": asdict(v),
+        "frames": int(info.times.size),
+        "size_px": [frame.width, frame.height],
+        "tracking_summary": json.loads(tracked.attrs["softcell_tracking_summary"]),
+        "source": str(simulation),
+        "notes": notes,
+    }

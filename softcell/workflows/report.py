@@ -53,8 +53,10 @@ def _markdown(blocks: Sequence[Block]) -> str:
         elif b.kind == "table":
             header, rows = b.content
             cells = [[str(c).replace("|", "\\|") for c in row] for row in [header, *rows]]
-            lines += ["| " + " | ".join(cells[0]) + " |",
-                      "| " + " | ".join("---" for _ in header) + " |"]
+            lines += [
+                "| " + " | ".join(cells[0]) + " |",
+                "| " + " | ".join("---" for _ in header) + " |",
+            ]
             lines += ["| " + " | ".join(row) + " |" for row in cells[1:]] + [""]
         elif b.kind == "figure":
             png, pdf, caption = b.content
@@ -62,17 +64,22 @@ def _markdown(blocks: Sequence[Block]) -> str:
     return "\n".join(lines)
 
 
-_CSS = ("body{font-family:sans-serif;max-width:72em;margin:2em auto;padding:0 1em;"
-        "line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
-        "#bbb;padding:.25em .5em;vertical-align:top;text-align:left}th{background:#eee}"
-        "img{max-width:100%}figure{margin:1.5em 0}pre{background:#f4f4f4;padding:.5em;"
-        "overflow-x:auto}.agrees{color:#1b5e20}.differs{color:#b71c1c}.partly{color:#e65100}")
+_CSS = (
+    "body{font-family:sans-serif;max-width:72em;margin:2em auto;padding:0 1em;"
+    "line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
+    "#bbb;padding:.25em .5em;vertical-align:top;text-align:left}th{background:#eee}"
+    "img{max-width:100%}figure{margin:1.5em 0}pre{background:#f4f4f4;padding:.5em;"
+    "overflow-x:auto}.agrees{color:#1b5e20}.differs{color:#b71c1c}.partly{color:#e65100}"
+)
 
 
 def _html(blocks: Sequence[Block], title: str) -> str:
     e = html.escape
-    parts = ["<!DOCTYPE html>", "<html lang=\"en\"><head><meta charset=\"utf-8\">",
-             f"<title>{e(title)}</title><style>{_CSS}</style></head><body>"]
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        f"<title>{e(title)}</title><style>{_CSS}</style></head><body>",
+    ]
     for b in blocks:
         if b.kind in ("h1", "h2"):
             parts.append(f"<{b.kind}>{e(b.content)}</{b.kind}>")
@@ -85,15 +92,24 @@ def _html(blocks: Sequence[Block], title: str) -> str:
         elif b.kind == "table":
             header, rows = b.content
             head = "".join(f"<th>{e(str(c))}</th>" for c in header)
-            body = "".join("<tr>" + "".join(
-                f"<td class=\"{e(str(c))}\">{e(str(c))}</td>" if str(c) in (
-                    "agrees", "differs", "partly") else f"<td>{e(str(c))}</td>" for c in row)
-                + "</tr>" for row in rows)
+            body = "".join(
+                "<tr>"
+                + "".join(
+                    f'<td class="{e(str(c))}">{e(str(c))}</td>'
+                    if str(c) in ("agrees", "differs", "partly")
+                    else f"<td>{e(str(c))}</td>"
+                    for c in row
+                )
+                + "</tr>"
+                for row in rows
+            )
             parts.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
         elif b.kind == "figure":
             png, pdf, caption = b.content
-            parts.append(f"<figure><img src=\"{e(png)}\" alt=\"{e(caption)}\"><figcaption>"
-                         f"{e(caption)} (<a href=\"{e(pdf)}\">PDF</a>)</figcaption></figure>")
+            parts.append(
+                f'<figure><img src="{e(png)}" alt="{e(caption)}"><figcaption>'
+                f'{e(caption)} (<a href="{e(pdf)}">PDF</a>)</figcaption></figure>'
+            )
     parts.append("</body></html>")
     return "\n".join(parts)
 
@@ -104,14 +120,14 @@ def _html(blocks: Sequence[Block], title: str) -> str:
 
 CAPTIONS = {
     "fig2": "Fig. 2. Trajectories of the bot and the cell GC at R = 4 cm (a, coupled) and "
-            "12 cm (b), their speeds (c, d), the cell MSD for every R (e), and the best "
-            "scaling collapse of the decoupled radii (f).",
+    "12 cm (b), their speeds (c, d), the cell MSD for every R (e), and the best "
+    "scaling collapse of the decoupled radii (f).",
     "fig3": "Fig. 3. (a) Cell speed at R = 12 cm, stops shaded, time average dashed; (b) PDFs "
-            "of go (left) and stop (right) durations over their mean for R >= 6 cm (the "
-            "tracked video's as triangles); (c) <tau_g> and <tau_s> against R, regimes "
-            "shaded (purple coupled, pink intermediate, green decoupled).",
+    "of go (left) and stop (right) durations over their mean for R >= 6 cm (the "
+    "tracked video's as triangles); (c) <tau_g> and <tau_s> against R, regimes "
+    "shaded (purple coupled, pink intermediate, green decoupled).",
     "fig4": "Fig. 4. Theory against fits of the cell MSD: (a) ballistic velocity and v0 hat, "
-            "(b) fitted MSD slope and D hat = 2 v0_hat^2 <tau_g>.",
+    "(b) fitted MSD slope and D hat = 2 v0_hat^2 <tau_g>.",
     "figS1": "Fig. S1 (b). MSD of the free bot and of the bot inside membranes of every R.",
     "figS2": "Fig. S2. Simulated PDFs of go (a) and stop (b) durations over their mean.",
     "figS3": "Fig. S3 (b). MSD of the bot and the cell at R = 12 cm, with standard errors.",
@@ -123,18 +139,37 @@ def _fmt(x: float, digits: int = 3) -> str:
 
 
 def _per_radius(analysis: xr.Dataset) -> Block:
-    header = ["R (cm)", "regime", "GC distance / R", "<tau_g> (s)", "<tau_s> (s)",
-              "ballistic v (cm/s)", "v0 hat (cm/s)", "D hat fit (cm2/s)",
-              "D hat theory (cm2/s)", "go phases", "IPR"]
+    header = [
+        "R (cm)",
+        "regime",
+        "GC distance / R",
+        "<tau_g> (s)",
+        "<tau_s> (s)",
+        "ballistic v (cm/s)",
+        "v0 hat (cm/s)",
+        "D hat fit (cm2/s)",
+        "D hat theory (cm2/s)",
+        "go phases",
+        "IPR",
+    ]
     rows = []
     for i, r in enumerate(analysis["radius"].values):
         a = analysis.isel(radius=i).sel(body="cell")
-        rows.append([f"{r:g}", REGIME_NAMES[int(analysis["regime"].values[i])],
-                     _fmt(float(analysis["gc_distance_ratio"].values[i]), 2),
-                     _fmt(float(a.mean_go_duration)), _fmt(float(a.mean_stop_duration)),
-                     _fmt(float(a.ballistic_velocity)), _fmt(float(a.v0_hat)),
-                     _fmt(float(a.msd_slope)), _fmt(float(a.msd_slope_theory)),
-                     str(int(a.go_events)), _fmt(float(analysis["ipr_mean"].values[i]), 4)])
+        rows.append(
+            [
+                f"{r:g}",
+                REGIME_NAMES[int(analysis["regime"].values[i])],
+                _fmt(float(analysis["gc_distance_ratio"].values[i]), 2),
+                _fmt(float(a.mean_go_duration)),
+                _fmt(float(a.mean_stop_duration)),
+                _fmt(float(a.ballistic_velocity)),
+                _fmt(float(a.v0_hat)),
+                _fmt(float(a.msd_slope)),
+                _fmt(float(a.msd_slope_theory)),
+                str(int(a.go_events)),
+                _fmt(float(analysis["ipr_mean"].values[i]), 4),
+            ]
+        )
     return Block("table", (header, rows))
 
 
@@ -142,16 +177,23 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
     from softcell.io.netcdf import read_dataset
 
     folder = out / "video"
-    sets = [("tracked video, 0.3 cm/s", read_dataset(folder / "tracked_analysis.nc")),
-            ("simulation, same span, 0.3 cm/s", read_dataset(folder /
-                                                            "simulated_analysis_0.3.nc")),
-            ("simulation, same span, 0.03 cm/s", read_dataset(folder /
-                                                             "simulated_analysis.nc"))]
-    quantities = [("mean cell speed (cm/s)", "mean_speed"), ("v0 hat (cm/s)", "v0_hat"),
-                  ("<tau_g> (s)", "mean_go_duration"), ("<tau_s> (s)", "mean_stop_duration"),
-                  ("go phases", "go_events"), ("ballistic v (cm/s)", "ballistic_velocity")]
-    rows = [[label] + [_fmt(float(ds[name].sel(body="cell"))) for _, ds in sets]
-            for label, name in quantities]
+    sets = [
+        ("tracked video, 0.3 cm/s", read_dataset(folder / "tracked_analysis.nc")),
+        ("simulation, same span, 0.3 cm/s", read_dataset(folder / "simulated_analysis_0.3.nc")),
+        ("simulation, same span, 0.03 cm/s", read_dataset(folder / "simulated_analysis.nc")),
+    ]
+    quantities = [
+        ("mean cell speed (cm/s)", "mean_speed"),
+        ("v0 hat (cm/s)", "v0_hat"),
+        ("<tau_g> (s)", "mean_go_duration"),
+        ("<tau_s> (s)", "mean_stop_duration"),
+        ("go phases", "go_events"),
+        ("ballistic v (cm/s)", "ballistic_velocity"),
+    ]
+    rows = [
+        [label] + [_fmt(float(ds[name].sel(body="cell"))) for _, ds in sets]
+        for label, name in quantities
+    ]
     shifted = sets[0][1]
     moves = []
     for kind in ("go", "stop"):
@@ -160,24 +202,38 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
     summary = ", ".join(f"{k} {v}" for k, v in video["tracking_summary"].items())
     return [
         Block("h2", "The experimental pipeline"),
-        Block("p", f"As the paper sets experiments beside simulations, realization 0 at "
-                   f"R = {video['radius']:g} cm ({video['source']}) was filmed from "
-                   f"t = {video['span'][0]:g} s to {video['span'][1]:g} s as the paper's "
-                   f"camera would ({video['design']['fps']:g} frames/s, "
-                   f"{video['design']['px_per_cm']:g} px/cm, {video['size_px'][0]}x"
-                   f"{video['size_px'][1]} px, Gaussian noise {video['design']['noise']:g} grey "
-                   f"levels, blur {video['design']['blur']:g} px, noise seed "
-                   f"{video['noise_seed']}), tracked with the paper's contour tracker and "
-                   "analysed with the experiments' threshold. Tracking outcome per frame: "
-                   f"{summary}."),
+        Block(
+            "p",
+            f"As the paper sets experiments beside simulations, realization 0 at "
+            f"R = {video['radius']:g} cm ({video['source']}) was filmed from "
+            f"t = {video['span'][0]:g} s to {video['span'][1]:g} s as the paper's "
+            f"camera would ({video['design']['fps']:g} frames/s, "
+            f"{video['design']['px_per_cm']:g} px/cm, {video['size_px'][0]}x"
+            f"{video['size_px'][1]} px, Gaussian noise {video['design']['noise']:g} grey "
+            f"levels, blur {video['design']['blur']:g} px, noise seed "
+            f"{video['noise_seed']}), tracked with the paper's contour tracker and "
+            "analysed with the experiments' threshold. Tracking outcome per frame: "
+            f"{summary}.",
+        ),
         Block("table", (["quantity", *[name for name, _ in sets]], rows)),
-        Block("p", "The experiments' threshold moved by -0.1 / 0 / +0.1 cm/s moves the tracked "
-                   "means to " + "; ".join(moves) + " (the paper: they barely move)."),
+        Block(
+            "p",
+            "The experiments' threshold moved by -0.1 / 0 / +0.1 cm/s moves the tracked "
+            "means to " + "; ".join(moves) + " (the paper: they barely move).",
+        ),
     ]
 
 
-def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[str, float],
-                 notes: Sequence[str], figures, video: dict[str, Any] | None) -> tuple[Path, Path]:
+def write_report(
+    out: str | os.PathLike[str],
+    *,
+    design,
+    seed: int,
+    steps: dict[str, float],
+    notes: Sequence[str],
+    figures,
+    video: dict[str, Any] | None,
+) -> tuple[Path, Path]:
     """Write ``out/report.md`` and ``out/report.html`` from the files of a reproduction.
 
     Also writes ``out/findings.json``: the findings table as a list of objects.
@@ -201,31 +257,52 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
     rows = findings(analysis, free_bot)
 
     blocks = [
-        Block("h1", "softcell: reproduction of \"Run and tumble dynamics of a soft robotic "
-                    "cell\""),
-        Block("p", f"softcell {__version__}, {datetime.now(UTC):%Y-%m-%d %H:%M} UTC, "
-                   f"{platform.python_implementation()} {platform.python_version()} on "
-                   f"{platform.machine()} with {os.cpu_count()} cores."),
+        Block("h1", 'softcell: reproduction of "Run and tumble dynamics of a soft robotic cell"'),
+        Block(
+            "p",
+            f"softcell {__version__}, {datetime.now(UTC):%Y-%m-%d %H:%M} UTC, "
+            f"{platform.python_implementation()} {platform.python_version()} on "
+            f"{platform.machine()} with {os.cpu_count()} cores.",
+        ),
         Block("code", command),
         Block("h2", "What ran"),
-        Block("list", [
-            f"Design '{design.name}': {design.describe()}."
-            + (f" {design.caveat}" if design.caveat else ""),
-            f"Components: {', '.join(f'{k} = {v}' for k, v in components.items())}.",
-            f"Seed {seed}: realization r of radius index p draws from SeedSequence({seed}, "
-            "spawn_key=(p, r)); the free bot's realization r uses (0, r), so it shares its "
-            "drive schedule with realization r at the smallest radius.",
-            "Analysis options: " + ", ".join(f"{k} = {v}" for k, v in sorted(options.items())),
-            "Wall time per step: " + ", ".join(f"{k} {v:.0f} s" for k, v in steps.items()),
-            *notes]),
-        Block("p", "Parameters (every file also carries them, with the seed, the component "
-                   "names and the package version):"),
-        Block("table", (["parameter", "value", "unit"], [
-            [k, json.dumps(v) if isinstance(v, list) else str(v), units.get(k, "")]
-            for k, v in sorted(params.items())])),
+        Block(
+            "list",
+            [
+                f"Design '{design.name}': {design.describe()}."
+                + (f" {design.caveat}" if design.caveat else ""),
+                f"Components: {', '.join(f'{k} = {v}' for k, v in components.items())}.",
+                f"Seed {seed}: realization r of radius index p draws from SeedSequence({seed}, "
+                "spawn_key=(p, r)); the free bot's realization r uses (0, r), so it shares its "
+                "drive schedule with realization r at the smallest radius.",
+                "Analysis options: " + ", ".join(f"{k} = {v}" for k, v in sorted(options.items())),
+                "Wall time per step: " + ", ".join(f"{k} {v:.0f} s" for k, v in steps.items()),
+                *notes,
+            ],
+        ),
+        Block(
+            "p",
+            "Parameters (every file also carries them, with the seed, the component "
+            "names and the package version):",
+        ),
+        Block(
+            "table",
+            (
+                ["parameter", "value", "unit"],
+                [
+                    [k, json.dumps(v) if isinstance(v, list) else str(v), units.get(k, "")]
+                    for k, v in sorted(params.items())
+                ],
+            ),
+        ),
         Block("h2", "Findings: the paper beside this run"),
-        Block("table", (["finding", "paper", "measured here", "verdict", "verdict rule"],
-                        [[f.topic, f.paper, f.measured, f.verdict, f.rule] for f in rows])),
+        Block(
+            "table",
+            (
+                ["finding", "paper", "measured here", "verdict", "verdict rule"],
+                [[f.topic, f.paper, f.measured, f.verdict, f.rule] for f in rows],
+            ),
+        ),
         Block("h2", "Per radius (cell GC)"),
         _per_radius(analysis),
     ]
@@ -234,16 +311,30 @@ def write_report(out: str | os.PathLike[str], *, design, seed: int, steps: dict[
     blocks.append(Block("h2", "Figures"))
     for name, files in figures.files.items():
         by_suffix = {p.suffix: p.relative_to(out).as_posix() for p in files}
-        blocks.append(Block("figure", (by_suffix.get(".png", ""), by_suffix.get(".pdf", ""),
-                                       CAPTIONS.get(name, name))))
+        blocks.append(
+            Block(
+                "figure",
+                (by_suffix.get(".png", ""), by_suffix.get(".pdf", ""), CAPTIONS.get(name, name)),
+            )
+        )
     for name, why in figures.skipped.items():
         blocks.append(Block("p", f"{name} was not drawn: {why}."))
     md, page = out / "report.md", out / "report.html"
     title = "softcell reproduction report"
-    summary = json.dumps({"softcell_version": __version__, "design": design.name, "seed": seed,
-                          "findings": [asdict(f) for f in rows]}, indent=1)
+    summary = json.dumps(
+        {
+            "softcell_version": __version__,
+            "design": design.name,
+            "seed": seed,
+            "findings": [asdict(f) for f in rows],
+        },
+        indent=1,
+    )
     with atomic_files() as staging:
-        for path, text in ((md, _markdown(blocks)), (page, _html(blocks, title)),
-                           (out / "findings.json", summary)):
+        for path, text in (
+            (md, _markdown(blocks)),
+            (page, _html(blocks, title)),
+            (out / "findings.json", summary),
+        ):
             staging.path(path).write_text(text, encoding="utf-8")
     return md, page

@@ -63,22 +63,34 @@ class Design:
     caveat: str = ""  # what the design gives up against the paper's, for the report
 
     def describe(self) -> str:
-        length = ("the paper's durations (900 s for R <= 9 cm, 1800 s above)"
-                  if self.duration is None else f"{self.duration:g} s each")
-        video = ("no video" if self.video is None else
-                 f"video of {self.video.span:g} s at R = {self.video.radius:g} cm")
-        return (f"{len(self.radii)} radii ({', '.join(f'{r:g}' for r in self.radii)} cm) x "
-                f"{self.realizations} realizations, {length}; {self.free_bot_realizations} "
-                f"free-bot realizations; first {self.discard:g} s discarded; {video}")
+        length = (
+            "the paper's durations (900 s for R <= 9 cm, 1800 s above)"
+            if self.duration is None
+            else f"{self.duration:g} s each"
+        )
+        video = (
+            "no video"
+            if self.video is None
+            else f"video of {self.video.span:g} s at R = {self.video.radius:g} cm"
+        )
+        return (
+            f"{len(self.radii)} radii ({', '.join(f'{r:g}' for r in self.radii)} cm) x "
+            f"{self.realizations} realizations, {length}; {self.free_bot_realizations} "
+            f"free-bot realizations; first {self.discard:g} s discarded; {video}"
+        )
 
 
 #: The README's main job: every radius, fewer and shorter runs; ~5 minutes on 2 cores.
 QUICK = Design(
-    "quick", realizations=5, duration=240.0, free_bot_realizations=5,
+    "quick",
+    realizations=5,
+    duration=240.0,
+    free_bot_realizations=5,
     caveat="5 realizations of 240 s per radius instead of the paper's 25 of 900/1800 s: the "
-           "long-lag quantities (the diffusive MSD slopes, the merging of the bot and cell "
-           "MSDs) carry larger errors than the paper's; `softcell reproduce --full` runs the "
-           "paper's design. The 15 s discard and every model parameter are the paper's.")
+    "long-lag quantities (the diffusive MSD slopes, the merging of the bot and cell "
+    "MSDs) carry larger errors than the paper's; `softcell reproduce --full` runs the "
+    "paper's design. The 15 s discard and every model parameter are the paper's.",
+)
 #: The paper's design: 25 realizations of 900 / 1800 s per radius.
 FULL = Design("full", video=VideoDesign(span=300.0))
 DESIGNS = {"quick": QUICK, "full": FULL}
@@ -100,8 +112,10 @@ class Outcome:
 
 
 def _config(design: Design, radius: float | list[float] | None = None) -> RunConfig:
-    values: dict[str, Any] = {**design.parameters,
-                              "radius": list(design.radii) if radius is None else radius}
+    values: dict[str, Any] = {
+        **design.parameters,
+        "radius": list(design.radii) if radius is None else radius,
+    }
     if design.duration is not None:
         values["duration"] = design.duration
     return RunConfig(parameters=values).updated(components=design.components)
@@ -113,16 +127,20 @@ MANIFEST = "reproduce.json"
 
 def _flat(prefix: str, value: Any) -> dict[str, Any]:
     if isinstance(value, dict):
-        return {k: v for key, item in value.items()
-                for k, v in _flat(f"{prefix}.{key}" if prefix else key, item).items()}
+        return {
+            k: v
+            for key, item in value.items()
+            for k, v in _flat(f"{prefix}.{key}" if prefix else key, item).items()
+        }
     return {prefix: value}
 
 
 def _manifest(design: Design, seed: int) -> dict[str, Any]:
     from softcell._version import __version__
 
-    return json.loads(json.dumps({"design": asdict(design), "seed": seed,
-                                  "softcell_version": __version__}))
+    return json.loads(
+        json.dumps({"design": asdict(design), "seed": seed, "softcell_version": __version__})
+    )
 
 
 def check_results_directory(out: Path, design: Design, seed: int, overwrite: bool) -> None:
@@ -134,18 +152,23 @@ def check_results_directory(out: Path, design: Design, seed: int, overwrite: boo
         return
     manifest = out / MANIFEST
     if not manifest.is_file():
-        raise SoftcellError(f"{out} is not empty and was not made by `softcell reproduce` (no "
-                            f"{MANIFEST}); choose a new directory, or pass --overwrite to "
-                            "write into it")
+        raise SoftcellError(
+            f"{out} is not empty and was not made by `softcell reproduce` (no "
+            f"{MANIFEST}); choose a new directory, or pass --overwrite to "
+            "write into it"
+        )
     try:
         made = json.loads(manifest.read_text())
     except (OSError, ValueError) as exc:
-        raise SoftcellError(f"{manifest} is unreadable ({exc}); pass --overwrite to redo the "
-                            "reproduction") from None
+        raise SoftcellError(
+            f"{manifest} is unreadable ({exc}); pass --overwrite to redo the reproduction"
+        ) from None
     why = first_mismatch(_flat("", made), _flat("", _manifest(design, seed)))
     if why:
-        raise SoftcellError(f"{out} holds a reproduction made with {why}; rerun with "
-                            "--overwrite to recompute it, or write to another directory")
+        raise SoftcellError(
+            f"{out} holds a reproduction made with {why}; rerun with "
+            "--overwrite to recompute it, or write to another directory"
+        )
 
 
 def finished(folder: Path, design: Design, seed: int) -> bool:
@@ -158,10 +181,17 @@ def finished(folder: Path, design: Design, seed: int) -> bool:
     return made == _manifest(design, seed) and (folder / TIMING).is_file()
 
 
-def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int = 0,
-              workers: int | None = None, scheduler: str | None = None,
-              overwrite: bool = False, progress: bool = True,
-              log: Callable[[str], None] | None = print) -> Outcome:
+def reproduce(
+    out: str | os.PathLike[str],
+    design: Design = QUICK,
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress: bool = True,
+    log: Callable[[str], None] | None = print,
+) -> Outcome:
     """Run ``design`` into ``out``: simulations, analyses, the video pipeline, figures, report.
 
     The design's durations and discard are in s, its radii in cm; every file it writes
@@ -209,16 +239,22 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     from softcell.workflows.report import write_report
 
     if design.realizations < 1 or design.free_bot_realizations < 1:
-        raise SoftcellError("a design needs at least one realization per radius and one "
-                            "free-bot realization")
+        raise SoftcellError(
+            "a design needs at least one realization per radius and one free-bot realization"
+        )
     if design.video is not None and design.video.radius not in design.radii:
-        raise SoftcellError(f"the video's radius {design.video.radius:g} cm is not among the "
-                            f"design's radii {list(design.radii)}")
+        raise SoftcellError(
+            f"the video's radius {design.video.radius:g} cm is not among the "
+            f"design's radii {list(design.radii)}"
+        )
     if workers is not None and workers < 1:
         raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
     if scheduler is None and workers is None:
-        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+        workers = (
+            len(os.sched_getaffinity(0))
+            if hasattr(os, "sched_getaffinity")
             else os.cpu_count() or 1
+        )
     check_seed(seed)
     out = check_output(out, "report", directory=True)
     check_results_directory(out, design, seed, overwrite)
@@ -227,8 +263,9 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     # Every check before anything is computed: both ensembles' requests against the files.
     need = 0
     for cfg, folder, count, membrane in (
-            (config, "simulations", design.realizations, True),
-            (free, "free_bot", design.free_bot_realizations, False)):
+        (config, "simulations", design.realizations, True),
+        (free, "free_bot", design.free_bot_realizations, False),
+    ):
         tasks = plan(cfg, out / folder, realizations=count, seed=seed, membrane=membrane)
         need += expected_bytes(resume_plan(tasks, out / folder, overwrite=overwrite).todo)
     check_writable(out, need)
@@ -246,45 +283,83 @@ def reproduce(out: str | os.PathLike[str], design: Design = QUICK, *, seed: int 
     def step(name: str, what: str):
         say(f"[{len(outcome.steps) + 1}/{total}] {what}")
         return _Timer(outcome.steps, name)
+
     with contextlib.ExitStack() as stack:
         # One cluster for both ensembles: each worker compiles its steppers once.
-        client = None if workers == 1 else stack.enter_context(
-            cluster_client(workers or 1, scheduler))
+        client = (
+            None if workers == 1 else stack.enter_context(cluster_client(workers or 1, scheduler))
+        )
         with step("simulations", f"simulating {design.describe()}"):
-            simulate(config, out / "simulations", realizations=design.realizations, seed=seed,
-                     client=client, progress=progress, overwrite=overwrite, log=say)
+            simulate(
+                config,
+                out / "simulations",
+                realizations=design.realizations,
+                seed=seed,
+                client=client,
+                progress=progress,
+                overwrite=overwrite,
+                log=say,
+            )
         with step("free_bot", "simulating the free bot"):
-            simulate(free, out / "free_bot", realizations=design.free_bot_realizations,
-                     seed=seed, client=client, membrane=False, progress=progress,
-                     overwrite=overwrite, log=say)
+            simulate(
+                free,
+                out / "free_bot",
+                realizations=design.free_bot_realizations,
+                seed=seed,
+                client=client,
+                membrane=False,
+                progress=progress,
+                overwrite=overwrite,
+                log=say,
+            )
     with step("analysis", "analysing the sweep and the free bot"):
         # One dask chunk per file: the analysis holds one radius in memory at a time.
-        analysis = analyze(open_dataset(out / "simulations", chunks={}), options,
-                           progress=progress)
+        analysis = analyze(open_dataset(out / "simulations", chunks={}), options, progress=progress)
         write_dataset(analysis, out / "analysis.nc")
         free_analysis = analyze(open_dataset(out / "free_bot"), options)
         write_dataset(free_analysis, out / "free_bot_analysis.nc")
     video = tracked = None
     if design.video is not None:
-        with step("video", f"rendering, tracking and analysing {design.video.span:g} s at "
-                  f"R = {design.video.radius:g} cm"):
-            task = next(t for t in plan(_config(design), out / "simulations", realizations=1,
-                                        seed=seed) if t.values["radius"] == design.video.radius)
-            video = experimental_pipeline(Path(task.path), out / "video", design.video,
-                                          discard=design.discard, seed=seed, progress=progress)
+        with step(
+            "video",
+            f"rendering, tracking and analysing {design.video.span:g} s at "
+            f"R = {design.video.radius:g} cm",
+        ):
+            task = next(
+                t
+                for t in plan(_config(design), out / "simulations", realizations=1, seed=seed)
+                if t.values["radius"] == design.video.radius
+            )
+            video = experimental_pipeline(
+                Path(task.path),
+                out / "video",
+                design.video,
+                discard=design.discard,
+                seed=seed,
+                progress=progress,
+            )
             video["source"] = str(Path(task.path).relative_to(out))
             outcome.notes.extend(video.pop("notes"))
         tracked = read_dataset(out / "video" / "tracked_analysis.nc")
     with step("figures", "drawing the figures"):
-        figures = make_figures(read_dataset(out / "analysis.nc"), out / "figures",
-                               simulations=open_dataset(out / "simulations", chunks={}),
-                               free_bot=read_dataset(out / "free_bot_analysis.nc"),
-                               tracked=tracked)
-        outcome.notes.extend(f"{name} not drawn: {why}" for name, why in
-                             figures.skipped.items())
+        figures = make_figures(
+            read_dataset(out / "analysis.nc"),
+            out / "figures",
+            simulations=open_dataset(out / "simulations", chunks={}),
+            free_bot=read_dataset(out / "free_bot_analysis.nc"),
+            tracked=tracked,
+        )
+        outcome.notes.extend(f"{name} not drawn: {why}" for name, why in figures.skipped.items())
     with step("report", "writing the report"):
-        write_report(out, design=design, seed=seed, steps=outcome.steps, notes=outcome.notes,
-                     figures=figures, video=video)
+        write_report(
+            out,
+            design=design,
+            seed=seed,
+            steps=outcome.steps,
+            notes=outcome.notes,
+            figures=figures,
+            video=video,
+        )
     _write_timing(out, outcome, workers if scheduler is None else None)
     say(f"report: {outcome.report} and {outcome.report.with_suffix('.html')}")
     return outcome
@@ -305,14 +380,16 @@ def _write_timing(out: Path, outcome: Outcome, workers: int | None) -> None:
 
     mib = 1024.0  # ru_maxrss is in KiB on Linux
     timing = {
-        "version": __version__, "date": datetime.date.today().isoformat(),
-        "cores": workers, "design": outcome.design.name,
+        "version": __version__,
+        "date": datetime.date.today().isoformat(),
+        "cores": workers,
+        "design": outcome.design.name,
         "steps": {k: round(v, 1) for k, v in outcome.steps.items()},
         "total": round(sum(outcome.steps.values()), 1),
         "peak_rss_mib": {
             "this_process": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / mib),
-            "largest_worker": round(
-                resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / mib)},
+            "largest_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / mib),
+        },
     }
     with atomic_write(out / TIMING) as tmp:
         tmp.write_text(json.dumps(timing, indent=1) + "\n", encoding="utf-8")

@@ -37,29 +37,52 @@ BASE = replace(QUICK, video=None)
 
 
 def _bot(a: float, b: float) -> Variant:
-    return Variant(f"bot_{a:g}x{b:g}", f"bot {a:g} x {b:g} cm",
-                   parameters={"bot_semi_major": a, "bot_semi_minor": b}, unknown="bot")
+    return Variant(
+        f"bot_{a:g}x{b:g}",
+        f"bot {a:g} x {b:g} cm",
+        parameters={"bot_semi_major": a, "bot_semi_minor": b},
+        unknown="bot",
+    )
 
 
 VARIANTS: tuple[Variant, ...] = (
     Variant("default", "defaults"),
-    _bot(2.5, 1.5), _bot(3.5, 2.5),
-    *(Variant(f"k_{k:g}", f"k = {k:g} N cm2", parameters={"bending_stiffness": k},
-              unknown="k") for k in (0.057, 0.18)),
-    *(Variant(f"cutoff_{c}", f"Lambda_c = {c}", parameters={"cutoff": c}, unknown="cutoff")
-      for c in (12, 19)),
-    Variant("lambda_1e-4", "lambda = 1e-4 cm", parameters={"contact_length": 1e-4},
-            unknown="lambda"),
-    Variant("pivot", "tumbles about a pivot 1 cm off-centre",
-            components={"driving_protocol": "pivot_run_and_tumble"}, unknown="rotation"),
-    Variant("coulomb", "coulomb friction, f_s = 1e-4 N/cm",
-            components={"friction_law": "coulomb"},
-            parameters={"membrane_static_friction": 1e-4, "static_friction_width": 1e-5},
-            unknown="friction"),
+    _bot(2.5, 1.5),
+    _bot(3.5, 2.5),
+    *(
+        Variant(f"k_{k:g}", f"k = {k:g} N cm2", parameters={"bending_stiffness": k}, unknown="k")
+        for k in (0.057, 0.18)
+    ),
+    *(
+        Variant(f"cutoff_{c}", f"Lambda_c = {c}", parameters={"cutoff": c}, unknown="cutoff")
+        for c in (12, 19)
+    ),
+    Variant(
+        "lambda_1e-4", "lambda = 1e-4 cm", parameters={"contact_length": 1e-4}, unknown="lambda"
+    ),
+    Variant(
+        "pivot",
+        "tumbles about a pivot 1 cm off-centre",
+        components={"driving_protocol": "pivot_run_and_tumble"},
+        unknown="rotation",
+    ),
+    Variant(
+        "coulomb",
+        "coulomb friction, f_s = 1e-4 N/cm",
+        components={"friction_law": "coulomb"},
+        parameters={"membrane_static_friction": 1e-4, "static_friction_width": 1e-5},
+        unknown="friction",
+    ),
 )
 #: What the defaults are, per unknown (for the tables' legends).
-DEFAULTS = {"bot": "3 x 2 cm", "k": "0.57 N cm2", "cutoff": "16", "lambda": "0.01 cm",
-            "rotation": "about the centre", "friction": "viscous"}
+DEFAULTS = {
+    "bot": "3 x 2 cm",
+    "k": "0.57 N cm2",
+    "cutoff": "16",
+    "lambda": "0.01 cm",
+    "rotation": "about the centre",
+    "friction": "viscous",
+}
 #: The bot's MSD inside the membrane is compared with the free bot's at this lag (s).
 SHORT_LAG = 0.1
 
@@ -69,15 +92,23 @@ def variants_named(names: Sequence[str]) -> tuple[Variant, ...]:
     known = {v.name: v for v in VARIANTS}
     bad = [n for n in names if n not in known]
     if bad:
-        raise SoftcellError(f"unknown variant(s) {', '.join(bad)}; the study's variants are "
-                            f"{', '.join(known)}")
+        raise SoftcellError(
+            f"unknown variant(s) {', '.join(bad)}; the study's variants are {', '.join(known)}"
+        )
     return (known["default"], *(known[n] for n in dict.fromkeys(names) if n != "default"))
 
 
-def sensitivity(out: str | os.PathLike[str], *, seed: int = 0, workers: int | None = None,
-                variants: tuple[Variant, ...] = VARIANTS, base: Design = BASE,
-                overwrite: bool = False, progress: bool = True,
-                log: Callable[[str], None] | None = print) -> Path:
+def sensitivity(
+    out: str | os.PathLike[str],
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    variants: tuple[Variant, ...] = VARIANTS,
+    base: Design = BASE,
+    overwrite: bool = False,
+    progress: bool = True,
+    log: Callable[[str], None] | None = print,
+) -> Path:
     """Run every variant of ``base`` into ``out/<variant>`` and write the comparison.
 
     Parameters
@@ -101,12 +132,21 @@ def sensitivity(out: str | os.PathLike[str], *, seed: int = 0, workers: int | No
     Path
         ``out / "sensitivity.md"``.
     """
-    run_variants(out, variants, base, seed=seed, workers=workers, overwrite=overwrite,
-                 progress=progress, log=log)
+    run_variants(
+        out,
+        variants,
+        base,
+        seed=seed,
+        workers=workers,
+        overwrite=overwrite,
+        progress=progress,
+        log=log,
+    )
     return summarize(out, variants, seed=seed, base=base)
 
 
 # -- what each variant measured ----------------------------------------------------------------
+
 
 def _mean_sem(per_realization: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Mean and standard error over the last axis (NaN-aware; NaN with fewer than 2)."""
@@ -116,8 +156,9 @@ def _mean_sem(per_realization: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         warnings.simplefilter("ignore", RuntimeWarning)
         n = np.sum(np.isfinite(per_realization), axis=-1)
         mean = np.nanmean(per_realization, axis=-1)
-        sem = np.where(n >= 2, np.nanstd(per_realization, axis=-1, ddof=1)
-                       / np.sqrt(np.maximum(n, 1)), np.nan)
+        sem = np.where(
+            n >= 2, np.nanstd(per_realization, axis=-1, ddof=1) / np.sqrt(np.maximum(n, 1)), np.nan
+        )
     return mean, sem
 
 
@@ -134,8 +175,9 @@ def crossing(radii: np.ndarray, ratio: np.ndarray, level: float) -> float:
     return float(r0 + (level - q0) * (r1 - r0) / (q1 - q0))
 
 
-def membrane_measures(sims, params: dict[str, Any], keep: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def membrane_measures(
+    sims, params: dict[str, Any], keep: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """From a sweep's stored membranes: the mean IPR per (radius, realization) over the
     samples ``keep`` (the smooth curve through the nodes, which sample a band-limited shape),
     and the largest |L / L_eq - 1| per radius over every realization and sample, L the
@@ -149,8 +191,7 @@ def membrane_measures(sims, params: dict[str, Any], keep: np.ndarray
     ipr, deviation = [], []
     for i, radius in enumerate(np.asarray(sims["radius"].values, dtype=float)):
         point = sims.isel(radius=i)  # [realization, time, node]
-        area, length = smooth_area_perimeter(point["membrane_x"].values,
-                                             point["membrane_y"].values)
+        area, length = smooth_area_perimeter(point["membrane_x"].values, point["membrane_y"].values)
         ipr.append((length / np.sqrt(np.abs(area)))[:, keep].mean(axis=-1))
         r_eq = equilibrium_radius(Parameters({**params, "radius": float(radius)}, specs))
         deviation.append(float(np.nanmax(np.abs(length / (2 * np.pi * r_eq) - 1))))
@@ -163,8 +204,9 @@ def run_speed(free_bot) -> float:
     time = np.asarray(free_bot["time"].values, dtype=float)
     step = np.diff(time)
     fine = np.isclose(step, step.min())
-    x, y = (np.asarray(free_bot[f"bot_{c}"].values, dtype=float).reshape(-1, time.size)
-            for c in "xy")
+    x, y = (
+        np.asarray(free_bot[f"bot_{c}"].values, dtype=float).reshape(-1, time.size) for c in "xy"
+    )
     run = np.asarray(free_bot["bot_phase"].values).reshape(-1, time.size) == 1
     both = run[:, 1:] & run[:, :-1] & fine
     v = np.hypot(np.diff(x, axis=1), np.diff(y, axis=1)) / step
@@ -196,15 +238,24 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     radii = np.asarray(analysis["radius"].values, dtype=float)
     opts = analysis_options(json.loads(analysis.attrs["softcell_analysis_options"]))
     time = np.asarray(analysis["time"].values, dtype=float)
-    only = (segments(time).index(LagPlan(time, opts).fine)
-            if opts["stopgo_segments"] == "finest" else None)
+    only = (
+        segments(time).index(LagPlan(time, opts).fine)
+        if opts["stopgo_segments"] == "finest"
+        else None
+    )
 
     labels = np.asarray(analysis["stopgo_label"].sel(body="cell").values)
-    tau_g = np.array([[durations(labels[i, r], time, only).mean(GO)
-                       for r in range(labels.shape[1])] for i in range(labels.shape[0])])
+    tau_g = np.array(
+        [
+            [durations(labels[i, r], time, only).mean(GO) for r in range(labels.shape[1])]
+            for i in range(labels.shape[0])
+        ]
+    )
     keep = np.asarray(sims["time"].values) >= float(sims["time"].values[0]) + opts["discard"]
-    gap = np.hypot(np.asarray(sims["bot_x"].values) - np.asarray(sims["cell_x"].values),
-                   np.asarray(sims["bot_y"].values) - np.asarray(sims["cell_y"].values))
+    gap = np.hypot(
+        np.asarray(sims["bot_x"].values) - np.asarray(sims["cell_x"].values),
+        np.asarray(sims["bot_y"].values) - np.asarray(sims["cell_y"].values),
+    )
     gc_ratio = np.nanmean(gap[..., keep], axis=-1) / radii[:, None]
     lag = np.asarray(analysis["lag"].values, dtype=float)
     k = int(np.argmin(np.abs(lag - SHORT_LAG)))
@@ -219,8 +270,7 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     findings = json.loads((folder / "findings.json").read_text())["findings"]
 
     def series(pooled: np.ndarray, each: np.ndarray) -> dict[str, list[float]]:
-        return {"value": [float(v) for v in pooled],
-                "sem": [float(v) for v in _mean_sem(each)[1]]}
+        return {"value": [float(v) for v in pooled], "sem": [float(v) for v in _mean_sem(each)[1]]}
 
     def at(r: float) -> str:
         i = np.flatnonzero(radii == r)
@@ -229,25 +279,31 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     coupled, decoupled = opts["coupled_below"], opts["decoupled_above"]
     bounds = {}
     for name, level in (("coupled_until", coupled), ("decoupled_from", decoupled)):
-        each = np.array([crossing(radii, gc_ratio[:, r], level)
-                         for r in range(gc_ratio.shape[1])])
-        bounds[name] = {"value": crossing(radii, np.asarray(
-            analysis["gc_distance_ratio"].values, dtype=float), level),
-            "sem": float(_mean_sem(each)[1]), "level": level}
+        each = np.array([crossing(radii, gc_ratio[:, r], level) for r in range(gc_ratio.shape[1])])
+        bounds[name] = {
+            "value": crossing(
+                radii, np.asarray(analysis["gc_distance_ratio"].values, dtype=float), level
+            ),
+            "sem": float(_mean_sem(each)[1]),
+            "level": level,
+        }
     return {
         "radius": radii.tolist(),
         "mean_go_duration": series(
-            np.asarray(analysis["mean_go_duration"].sel(body="cell").values), tau_g),
-        "gc_distance_ratio": series(
-            np.asarray(analysis["gc_distance_ratio"].values), gc_ratio),
+            np.asarray(analysis["mean_go_duration"].sel(body="cell").values), tau_g
+        ),
+        "gc_distance_ratio": series(np.asarray(analysis["gc_distance_ratio"].values), gc_ratio),
         "ipr": series(ipr.mean(axis=-1), ipr),
         "bot_msd_ratio": series(bot_pooled / free_short, bot_each / free_short),
         "short_lag": float(lag[k]),
         "regime": [REGIME_NAMES[int(g)] for g in regime],
         "regime_bounds": bounds,
-        "facts": {"free_bot_run_speed": run_speed(open_dataset(folder / "free_bot")),
-                  "length_deviation": float(deviation.max()),
-                  "regime_at_4": at(4.0), "regime_at_12": at(12.0)},
+        "facts": {
+            "free_bot_run_speed": run_speed(open_dataset(folder / "free_bot")),
+            "length_deviation": float(deviation.max()),
+            "regime_at_4": at(4.0),
+            "regime_at_12": at(12.0),
+        },
         "verdicts": {f["topic"]: f["verdict"] for f in findings},
         "measured": {f["topic"]: f["measured"] for f in findings},
     }
@@ -257,10 +313,12 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
 
 #: The paper's stated facts a proposed default must keep: (key, label, test).
 FACTS = (
-    ("free_bot_run_speed", "free bot's speed 15 cm/s (median over its runs, within 2 %)",
-     lambda v: abs(v / 15.0 - 1) < 0.02),
-    ("length_deviation", "membrane length within 0.1 % of its equilibrium",
-     lambda v: v < 1e-3),
+    (
+        "free_bot_run_speed",
+        "free bot's speed 15 cm/s (median over its runs, within 2 %)",
+        lambda v: abs(v / 15.0 - 1) < 0.02,
+    ),
+    ("length_deviation", "membrane length within 0.1 % of its equilibrium", lambda v: v < 1e-3),
     ("regime_at_4", "coupled at R = 4 cm", lambda v: v == "coupled"),
     ("regime_at_12", "decoupled at R = 12 cm", lambda v: v == "decoupled"),
 )
@@ -271,15 +329,20 @@ def facts_kept(result: dict[str, Any]) -> dict[str, bool]:
     return {key: bool(test(result["facts"][key])) for key, _, test in FACTS}
 
 
-def flips(results: dict[str, dict[str, Any]], variants: Sequence[Variant]
-          ) -> dict[str, dict[str, str]]:
+def flips(
+    results: dict[str, dict[str, Any]], variants: Sequence[Variant]
+) -> dict[str, dict[str, str]]:
     """Per finding, the variants whose verdict differs from the reference's (the first
     variant), with their verdict."""
     reference = results[variants[0].name]["verdicts"]
-    return {topic: {v.name: results[v.name]["verdicts"].get(topic, "-")
-                    for v in variants[1:]
-                    if results[v.name]["verdicts"].get(topic, "-") != verdict}
-            for topic, verdict in reference.items()}
+    return {
+        topic: {
+            v.name: results[v.name]["verdicts"].get(topic, "-")
+            for v in variants[1:]
+            if results[v.name]["verdicts"].get(topic, "-") != verdict
+        }
+        for topic, verdict in reference.items()
+    }
 
 
 def candidates(results: dict[str, dict[str, Any]], variants: Sequence[Variant]) -> list[str]:
@@ -295,8 +358,13 @@ def candidates(results: dict[str, dict[str, Any]], variants: Sequence[Variant]) 
     return out
 
 
-def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIANTS, *,
-              seed: int = 0, base: Design = BASE) -> Path:
+def summarize(
+    out: str | os.PathLike[str],
+    variants: tuple[Variant, ...] = VARIANTS,
+    *,
+    seed: int = 0,
+    base: Design = BASE,
+) -> Path:
     """``sensitivity.md``, ``sensitivity.json`` and ``figures/`` in ``out`` from the
     variants' folders."""
     from softcell.io.files import atomic_write
@@ -304,14 +372,19 @@ def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIA
     out = Path(out)
     missing = [v.name for v in variants if not (out / v.name / "findings.json").is_file()]
     if missing:
-        raise SoftcellError(f"{out} has no finished variant {', '.join(missing)}: run "
-                            f"`softcell study sensitivity -o {out}` to make them")
+        raise SoftcellError(
+            f"{out} has no finished variant {', '.join(missing)}: run "
+            f"`softcell study sensitivity -o {out}` to make them"
+        )
     results = {v.name: measure(out / v.name) for v in variants}
     with atomic_write(out / "sensitivity.json") as tmp:
-        tmp.write_text(json.dumps({"seed": seed, "variants": results}, indent=1) + "\n",
-                       encoding="utf-8")
-    figures = [_values_figure(out / "figures", variants, results),
-               _verdicts_figure(out / "figures", variants, results)]
+        tmp.write_text(
+            json.dumps({"seed": seed, "variants": results}, indent=1) + "\n", encoding="utf-8"
+        )
+    figures = [
+        _values_figure(out / "figures", variants, results),
+        _verdicts_figure(out / "figures", variants, results),
+    ]
     with atomic_write(out / "sensitivity.md") as tmp:
         tmp.write_text(_markdown(variants, results, figures, seed, base), encoding="utf-8")
     return out / "sensitivity.md"
@@ -325,14 +398,17 @@ def _groups(variants: Sequence[Variant]) -> dict[str, list[Variant]]:
 
 
 #: The figure's rows: (key, axis label, log scale, offset subtracted).
-_ROWS = (("mean_go_duration", "<tau_g> (s)", False, 0.0),
-         ("gc_distance_ratio", "GC distance / R", False, 0.0),
-         ("ipr", "IPR - 2 sqrt(pi)", True, 2 * math.sqrt(math.pi)),
-         ("bot_msd_ratio", "bot MSD / free bot's", False, 0.0))
+_ROWS = (
+    ("mean_go_duration", "<tau_g> (s)", False, 0.0),
+    ("gc_distance_ratio", "GC distance / R", False, 0.0),
+    ("ipr", "IPR - 2 sqrt(pi)", True, 2 * math.sqrt(math.pi)),
+    ("bot_msd_ratio", "bot MSD / free bot's", False, 0.0),
+)
 
 
-def _values_figure(folder: Path, variants: Sequence[Variant],
-                   results: dict[str, dict[str, Any]]) -> str:
+def _values_figure(
+    folder: Path, variants: Sequence[Variant], results: dict[str, dict[str, Any]]
+) -> str:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -341,18 +417,36 @@ def _values_figure(folder: Path, variants: Sequence[Variant],
     folder.mkdir(parents=True, exist_ok=True)
     groups = _groups(variants)
     reference = variants[0]
-    fig, axes = plt.subplots(len(_ROWS), len(groups), figsize=(2.9 * len(groups), 9.5),
-                             sharex=True, sharey="row", constrained_layout=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(_ROWS),
+        len(groups),
+        figsize=(2.9 * len(groups), 9.5),
+        sharex=True,
+        sharey="row",
+        constrained_layout=True,
+        squeeze=False,
+    )
     for col, (unknown, members) in enumerate(groups.items()):
         for row, (key, ylabel, log, offset) in enumerate(_ROWS):
             ax = axes[row, col]
-            for v, style in ((reference, dict(color="k", marker="o")),
-                             *((m, dict(marker="s^v"[j % 3])) for j, m in enumerate(members))):
+            for v, style in (
+                (reference, dict(color="k", marker="o")),
+                *((m, dict(marker="s^v"[j % 3])) for j, m in enumerate(members)),
+            ):
                 r = results[v.name]
                 value = np.asarray(r[key]["value"]) - offset
-                ax.errorbar(r["radius"], value, yerr=r[key]["sem"], ms=3.5, lw=1, capsize=2,
-                            label=f"{v.label}" if v is not reference else
-                            f"default ({DEFAULTS.get(unknown, '')})", **style)
+                ax.errorbar(
+                    r["radius"],
+                    value,
+                    yerr=r[key]["sem"],
+                    ms=3.5,
+                    lw=1,
+                    capsize=2,
+                    label=f"{v.label}"
+                    if v is not reference
+                    else f"default ({DEFAULTS.get(unknown, '')})",
+                    **style,
+                )
             if key == "gc_distance_ratio":
                 for level in results[reference.name]["regime_bounds"].values():
                     ax.axhline(level["level"], color="0.6", lw=0.8, ls="--")
@@ -364,8 +458,11 @@ def _values_figure(folder: Path, variants: Sequence[Variant],
                 ax.set_xlabel("R (cm)")
         axes[0, col].set_title(unknown, fontsize=10)
         axes[0, col].legend(fontsize=6.5, loc="best")
-    fig.suptitle("The quick design over one unknown at a time (error bars: standard error "
-                 "across realizations)", fontsize=10)
+    fig.suptitle(
+        "The quick design over one unknown at a time (error bars: standard error "
+        "across realizations)",
+        fontsize=10,
+    )
     fig.savefig(folder / "sensitivity.png", dpi=110)
     plt.close(fig)
     return "sensitivity.png"
@@ -374,8 +471,9 @@ def _values_figure(folder: Path, variants: Sequence[Variant],
 _VERDICT_CODE = {"agrees": 2, "partly": 1, "differs": 0}
 
 
-def _verdicts_figure(folder: Path, variants: Sequence[Variant],
-                     results: dict[str, dict[str, Any]]) -> str:
+def _verdicts_figure(
+    folder: Path, variants: Sequence[Variant], results: dict[str, dict[str, Any]]
+) -> str:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -383,25 +481,45 @@ def _verdicts_figure(folder: Path, variants: Sequence[Variant],
     from matplotlib.colors import ListedColormap
 
     topics = list(results[variants[0].name]["verdicts"])
-    grid = np.array([[_VERDICT_CODE.get(results[v.name]["verdicts"].get(t, ""), np.nan)
-                      for v in variants] for t in topics], dtype=float)
-    fig, ax = plt.subplots(figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
-                           constrained_layout=True)
+    grid = np.array(
+        [
+            [_VERDICT_CODE.get(results[v.name]["verdicts"].get(t, ""), np.nan) for v in variants]
+            for t in topics
+        ],
+        dtype=float,
+    )
+    fig, ax = plt.subplots(
+        figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
+        constrained_layout=True,
+    )
     cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
     ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")
     reference = grid[:, :1]
     for (i, j), code in np.ndenumerate(grid):
-        text = {2: "agrees", 1: "partly", 0: "differs"}.get(int(code), "n/m") \
-            if np.isfinite(code) else "n/m"
-        flipped = j > 0 and not (np.isnan(code) and np.isnan(reference[i, 0])) \
-            and code != reference[i, 0]
-        ax.text(j, i, text, ha="center", va="center", fontsize=7,
-                fontweight="bold" if flipped else "normal")
-    ax.set_xticks(range(len(variants)), [v.name for v in variants], rotation=40, ha="right",
-                  fontsize=8)
+        text = (
+            {2: "agrees", 1: "partly", 0: "differs"}.get(int(code), "n/m")
+            if np.isfinite(code)
+            else "n/m"
+        )
+        flipped = (
+            j > 0 and not (np.isnan(code) and np.isnan(reference[i, 0])) and code != reference[i, 0]
+        )
+        ax.text(
+            j,
+            i,
+            text,
+            ha="center",
+            va="center",
+            fontsize=7,
+            fontweight="bold" if flipped else "normal",
+        )
+    ax.set_xticks(
+        range(len(variants)), [v.name for v in variants], rotation=40, ha="right", fontsize=8
+    )
     ax.set_yticks(range(len(topics)), topics, fontsize=8)
-    ax.set_title("verdict per finding and variant\n(bold: not the defaults'; n/m: not "
-                 "measured)", fontsize=9)
+    ax.set_title(
+        "verdict per finding and variant\n(bold: not the defaults'; n/m: not measured)", fontsize=9
+    )
     fig.savefig(folder / "verdicts.png", dpi=110)
     plt.close(fig)
     return "verdicts.png"
@@ -442,56 +560,120 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
         cells = [results[v.name]["verdicts"].get(t, "-") for v in variants]
         lines.append(_row([t, mine, *[f"**{c}**" if c != mine else c for c in cells[1:]]]))
     agree = [sum(x == "agrees" for x in results[v.name]["verdicts"].values()) for v in variants]
-    lines += [_row(["findings that agree", *agree]), "",
-              "Bold: a verdict that differs from the defaults'.", "",
-              "## Which variants flip a verdict", "",
-              _row(["finding", "defaults", "flipped by"]), _row(["---"] * 3)]
+    lines += [
+        _row(["findings that agree", *agree]),
+        "",
+        "Bold: a verdict that differs from the defaults'.",
+        "",
+        "## Which variants flip a verdict",
+        "",
+        _row(["finding", "defaults", "flipped by"]),
+        _row(["---"] * 3),
+    ]
     for t, who in flips(results, variants).items():
-        lines.append(_row([t, ref["verdicts"][t], "; ".join(
-            f"{n}: {v}" for n, v in who.items()) or "none"]))
-    lines += ["", "## The paper's stated facts per variant", "",
-              _row(["variant", *[label for _, label, _ in FACTS]]),
-              _row(["---"] * (1 + len(FACTS)))]
+        lines.append(
+            _row([t, ref["verdicts"][t], "; ".join(f"{n}: {v}" for n, v in who.items()) or "none"])
+        )
+    lines += [
+        "",
+        "## The paper's stated facts per variant",
+        "",
+        _row(["variant", *[label for _, label, _ in FACTS]]),
+        _row(["---"] * (1 + len(FACTS))),
+    ]
     for v in variants:
         f, kept = results[v.name]["facts"], facts_kept(results[v.name])
-        cells = [f"{f['free_bot_run_speed']:.2f} cm/s", f"{f['length_deviation']:.2%}",
-                 f["regime_at_4"], f["regime_at_12"]]
-        lines.append(_row([v.name, *[c if kept[key] else f"**{c}** (broken)"
-                                     for c, (key, _, _) in zip(cells, FACTS, strict=True)]]))
+        cells = [
+            f"{f['free_bot_run_speed']:.2f} cm/s",
+            f"{f['length_deviation']:.2%}",
+            f["regime_at_4"],
+            f["regime_at_12"],
+        ]
+        lines.append(
+            _row(
+                [
+                    v.name,
+                    *[
+                        c if kept[key] else f"**{c}** (broken)"
+                        for c, (key, _, _) in zip(cells, FACTS, strict=True)
+                    ],
+                ]
+            )
+        )
     proposed = candidates(results, variants)
-    lines += ["", "A variant is a candidate default when it agrees with strictly more findings "
-              "than the defaults, every finding the defaults agree with included, and keeps "
-              "every fact above: " + (", ".join(proposed) if proposed else "none") + ".", ""]
-    lines += ["## The measured values", "",
-              f"Pooled value ± standard error across the {base.realizations} realizations "
-              "(common random numbers: "
-              "a difference between variants is smaller than the error bars suggest).", ""]
-    tables = (("mean_go_duration", "<tau_g> of the cell (s)", ".3f", 0.0),
-              ("gc_distance_ratio", "bot-cell GC distance / R (coupled <= 0.35, decoupled "
-               ">= 0.5)", ".2f", 0.0),
-              ("ipr", "mean IPR minus a circle's 2 sqrt(pi) = 3.5449", ".1e",
-               2 * math.sqrt(math.pi)),
-              ("bot_msd_ratio", f"bot MSD in the membrane / free bot's, at lag "
-               f"{ref['short_lag']:g} s", ".2f", 0.0))
+    lines += [
+        "",
+        "A variant is a candidate default when it agrees with strictly more findings "
+        "than the defaults, every finding the defaults agree with included, and keeps "
+        "every fact above: " + (", ".join(proposed) if proposed else "none") + ".",
+        "",
+    ]
+    lines += [
+        "## The measured values",
+        "",
+        f"Pooled value ± standard error across the {base.realizations} realizations "
+        "(common random numbers: "
+        "a difference between variants is smaller than the error bars suggest).",
+        "",
+    ]
+    tables = (
+        ("mean_go_duration", "<tau_g> of the cell (s)", ".3f", 0.0),
+        (
+            "gc_distance_ratio",
+            "bot-cell GC distance / R (coupled <= 0.35, decoupled >= 0.5)",
+            ".2f",
+            0.0,
+        ),
+        ("ipr", "mean IPR minus a circle's 2 sqrt(pi) = 3.5449", ".1e", 2 * math.sqrt(math.pi)),
+        (
+            "bot_msd_ratio",
+            f"bot MSD in the membrane / free bot's, at lag {ref['short_lag']:g} s",
+            ".2f",
+            0.0,
+        ),
+    )
     for key, title, digits, offset in tables:
-        lines += [f"### {title}", "", _row(["variant", *[f"R = {r:g}" for r in radii]]),
-                  _row(["---"] * (1 + len(radii)))]
+        lines += [
+            f"### {title}",
+            "",
+            _row(["variant", *[f"R = {r:g}" for r in radii]]),
+            _row(["---"] * (1 + len(radii))),
+        ]
         for v in variants:
             r = results[v.name][key]
-            lines.append(_row([v.name, *[_pm(x - offset, s, digits)
-                                         for x, s in zip(r["value"], r["sem"], strict=True)]]))
+            lines.append(
+                _row(
+                    [
+                        v.name,
+                        *[
+                            _pm(x - offset, s, digits)
+                            for x, s in zip(r["value"], r["sem"], strict=True)
+                        ],
+                    ]
+                )
+            )
         lines.append("")
-    lines += ["### Regime boundaries (cm)", "",
-              "Where the GC distance ratio reaches 0.35 (end of the coupled regime) and 0.5 "
-              "(start of the decoupled one), interpolated between radii; the first radius when "
-              "it starts above, - when it never reaches it.", "",
-              _row(["variant", "coupled until", "decoupled from", "regime per R"]),
-              _row(["---"] * 4)]
+    lines += [
+        "### Regime boundaries (cm)",
+        "",
+        "Where the GC distance ratio reaches 0.35 (end of the coupled regime) and 0.5 "
+        "(start of the decoupled one), interpolated between radii; the first radius when "
+        "it starts above, - when it never reaches it.",
+        "",
+        _row(["variant", "coupled until", "decoupled from", "regime per R"]),
+        _row(["---"] * 4),
+    ]
     for v in variants:
         b = results[v.name]["regime_bounds"]
-        lines.append(_row([v.name, _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"],
-                                       ".2f"),
-                           _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".2f"),
-                           ", ".join(g[:3] for g in results[v.name]["regime"])]))
+        lines.append(
+            _row(
+                [
+                    v.name,
+                    _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"], ".2f"),
+                    _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".2f"),
+                    ", ".join(g[:3] for g in results[v.name]["regime"]),
+                ]
+            )
+        )
     lines += ["", *[f"![{f}](figures/{f})" for f in figures], ""]
     return "\n".join(lines) + "\n"

@@ -23,7 +23,7 @@ def naive_msd(r):
     size = len(r)
     out = np.full(size, np.nan)
     for m in range(size):
-        d = r[m:] - r[:size - m]
+        d = r[m:] - r[: size - m]
         ok = np.all(np.isfinite(d), axis=1)
         if ok.any():
             out[m] = np.mean(np.sum(d[ok] ** 2, axis=1))
@@ -31,10 +31,15 @@ def naive_msd(r):
 
 
 @settings(max_examples=60, deadline=None)
-@given(hnp.arrays(np.float64, st.tuples(st.integers(1, 120), st.integers(1, 3)),
-                  elements=st.floats(-50, 50, allow_nan=False)),
-       st.sampled_from([0.0, 1e4, -3e4]),
-       st.lists(st.integers(0, 119), max_size=10))
+@given(
+    hnp.arrays(
+        np.float64,
+        st.tuples(st.integers(1, 120), st.integers(1, 3)),
+        elements=st.floats(-50, 50, allow_nan=False),
+    ),
+    st.sampled_from([0.0, 1e4, -3e4]),
+    st.lists(st.integers(0, 119), max_size=10),
+)
 def test_fft_msd_equals_the_double_loop(r, offset, holes):
     r = r + offset
     r[[h for h in holes if h < len(r)]] = np.nan
@@ -137,8 +142,9 @@ def test_stop_and_go_fits_and_theory_recover_the_planted_process():
     rng = np.random.default_rng(5)
     v, tg, ts = 2.0, 1.0, 2.0
     times = two_rate_times(0.01, 0.1, 100.0, 2000.0)
-    ds = stop_and_go_dataset(rng, times, realizations=200, speed=v, mean_go=tg, mean_stop=ts,
-                             nodes=4, offset=(1e4, -1e4))
+    ds = stop_and_go_dataset(
+        rng, times, realizations=200, speed=v, mean_go=tg, mean_stop=ts, nodes=4, offset=(1e4, -1e4)
+    )
     out = analyze(ds, {"max_lag_fraction": 0.25, "stopgo_segments": "finest"}).sel(body="cell")
     v0_planted = np.sqrt(tg / (tg + ts)) * v
     slope_planted = 2 * v0_planted**2 * tg
@@ -191,8 +197,9 @@ def test_shape_index_of_known_shapes():
     a, b, n = 5.0, 3.0, 20000
     t = 2 * np.pi * np.arange(n) / n
     ellipse = shape_index(a * np.cos(t), b * np.sin(t))
-    assert ellipse == pytest.approx(4 * a * ellipe(1 - b**2 / a**2) / np.sqrt(np.pi * a * b),
-                                    rel=1e-7)
+    assert ellipse == pytest.approx(
+        4 * a * ellipe(1 - b**2 / a**2) / np.sqrt(np.pi * a * b), rel=1e-7
+    )
     # A band-limited curve from few nodes: the smooth curve's IPR, not its polygon's.
     for n in (16, 64):
         t = 2 * np.pi * np.arange(n) / n
@@ -200,8 +207,9 @@ def test_shape_index_of_known_shapes():
         exact = 4 * 8.3 * ellipe(1 - 7.6**2 / 8.3**2) / np.sqrt(np.pi * 8.3 * 7.6)
         assert smooth == pytest.approx(exact, abs=1e-12)
         assert shape_index(8.3 * np.cos(t), 7.6 * np.sin(t)) - exact > 1e-3  # the polygon's
-    _, _, cx, cy = polygon_area_perimeter_centroid(np.array([0.0, 4, 4, 0, 0]) + 1e4,
-                                                   np.array([0.0, 0, 2, 2, 1]))
+    _, _, cx, cy = polygon_area_perimeter_centroid(
+        np.array([0.0, 4, 4, 0, 0]) + 1e4, np.array([0.0, 0, 2, 2, 1])
+    )
     assert (cx, cy) == (pytest.approx(1e4 + 2), pytest.approx(1.0))
 
 
@@ -218,16 +226,18 @@ def test_collapse_metric_finds_the_planted_scaling():
 
 def test_missing_variable_is_named():
     rng = np.random.default_rng(0)
-    ds = stop_and_go_dataset(rng, 0.01 * np.arange(100), realizations=1, speed=1.0,
-                             mean_go=0.1, mean_stop=0.1)
+    ds = stop_and_go_dataset(
+        rng, 0.01 * np.arange(100), realizations=1, speed=1.0, mean_go=0.1, mean_stop=0.1
+    )
     with pytest.raises(SoftcellError, match="bot_y, membrane_x"):
         analyze(ds.drop_vars(["bot_y", "membrane_x"]))
 
 
 def test_bad_option_is_named():
     rng = np.random.default_rng(0)
-    ds = stop_and_go_dataset(rng, 0.01 * np.arange(100), realizations=1, speed=1.0,
-                             mean_go=0.1, mean_stop=0.1)
+    ds = stop_and_go_dataset(
+        rng, 0.01 * np.arange(100), realizations=1, speed=1.0, mean_go=0.1, mean_stop=0.1
+    )
     with pytest.raises(softcell.ParameterError, match="discard = -1"):
         analyze(ds, {"discard": -1})
     with pytest.raises(softcell.ConfigError, match="did you mean 'discard'"):
@@ -236,11 +246,13 @@ def test_bad_option_is_named():
 
 def test_accessor_matches_the_pipeline():
     rng = np.random.default_rng(4)
-    ds = stop_and_go_dataset(rng, 0.01 * np.arange(3000), realizations=3, speed=1.0,
-                             mean_go=0.5, mean_stop=0.5)
+    ds = stop_and_go_dataset(
+        rng, 0.01 * np.arange(3000), realizations=3, speed=1.0, mean_go=0.5, mean_stop=0.5
+    )
     direct = analyze(ds, {"discard": 1.0})
-    np.testing.assert_array_equal(ds.softcell.msd("cell", discard=1.0).values,
-                                  direct.msd.sel(body="cell").values)
+    np.testing.assert_array_equal(
+        ds.softcell.msd("cell", discard=1.0).values, direct.msd.sel(body="cell").values
+    )
     speed = ds.softcell.speed("bot")
     assert speed.attrs["units"] == "cm s-1" and speed.shape == ds.bot_x.shape
     cx, cy = ds.softcell.geometric_center("centroid")

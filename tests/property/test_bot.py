@@ -25,9 +25,12 @@ def brute_distance(px, py, a, b):
     d2 = (a * np.cos(s) - px) ** 2 + (b * np.sin(s) - py) ** 2
     i = int(d2.argmin())
     ds = s[1] - s[0]
-    best = minimize_scalar(lambda t: (a * np.cos(t) - px) ** 2 + (b * np.sin(t) - py) ** 2,
-                           bounds=(s[i] - ds, s[i] + ds), method="bounded",
-                           options={"xatol": 1e-13})
+    best = minimize_scalar(
+        lambda t: (a * np.cos(t) - px) ** 2 + (b * np.sin(t) - py) ** 2,
+        bounds=(s[i] - ds, s[i] + ds),
+        method="bounded",
+        options={"xatol": 1e-13},
+    )
     d = np.sqrt(min(best.fun, d2[i]))
     return -d if (px / a) ** 2 + (py / b) ** 2 < 1 else d
 
@@ -36,10 +39,16 @@ near_axis = st.one_of(st.floats(-1e-9, 1e-9), st.just(0.0))
 
 
 @settings(max_examples=200)
-@given(st.floats(1.0, 4.0), st.floats(0.3, 1.0),
-       st.tuples(st.floats(-6, 6), st.floats(-6, 6)) | st.tuples(st.floats(-6, 6), near_axis)
-       | st.tuples(near_axis, st.floats(-6, 6)),
-       st.floats(-5, 5), st.floats(-5, 5), st.floats(-7, 7))
+@given(
+    st.floats(1.0, 4.0),
+    st.floats(0.3, 1.0),
+    st.tuples(st.floats(-6, 6), st.floats(-6, 6))
+    | st.tuples(st.floats(-6, 6), near_axis)
+    | st.tuples(near_axis, st.floats(-6, 6)),
+    st.floats(-5, 5),
+    st.floats(-5, 5),
+    st.floats(-7, 7),
+)
 def test_signed_distance_matches_brute_force(a, ratio, point, cx, cy, theta):
     b = a * ratio
     px, py = point
@@ -51,7 +60,8 @@ def test_signed_distance_matches_brute_force(a, ratio, point, cx, cy, theta):
     # The gradient is the outward normal: a small step along it adds its length to rho.
     h = 1e-6
     assert signed_distance(x + h * gx, y + h * gy, cx, cy, theta, a, b)[0] == pytest.approx(
-        rho + h, abs=1e-9)
+        rho + h, abs=1e-9
+    )
 
 
 def test_free_bot_runs_at_f0_over_gamma_t():
@@ -66,7 +76,8 @@ def test_free_bot_runs_at_f0_over_gamma_t():
     turning = (record.phase[:-1] == 0) & (record.phase[1:] == 0)
     omega = np.abs(np.diff(record.pose[:, 2]) / np.diff(record.times))
     assert omega[turning] == pytest.approx(
-        params.drive_torque / params.bot_rotational_friction, rel=1e-9)
+        params.drive_torque / params.bot_rotational_friction, rel=1e-9
+    )
 
 
 @pytest.mark.parametrize("pivot, expected", [(None, 17.43), ("fixed", 17.43), ("inner", 15.56)])
@@ -79,19 +90,25 @@ def test_free_bot_diffusion_matches_spec(pivot, expected):
 
 
 @settings(max_examples=10)
-@given(st.floats(0.05, 1.0), st.floats(1.0, 4.0), st.floats(20, 400), st.floats(0, 2),
-       st.sampled_from([None, "fixed", "inner"]))
+@given(
+    st.floats(0.05, 1.0),
+    st.floats(1.0, 4.0),
+    st.floats(20, 400),
+    st.floats(0, 2),
+    st.sampled_from([None, "fixed", "inner"]),
+)
 # Nearly fixed phase lengths once broke the formula by cancellation in (hi^3 - lo^3)/(hi - lo).
 @example(lo=1.0, spread=1.0000000000000002, torque=33.0, offset=0.0, pivot=None)
 def test_renewal_formula_against_exact_kinematics(lo, spread, torque, offset, pivot):
-    params = Parameters({"phase_min": lo, "phase_max": lo * spread, "drive_torque": torque,
-                         "pivot_offset": offset})
+    params = Parameters(
+        {"phase_min": lo, "phase_max": lo * spread, "drive_torque": torque, "pivot_offset": offset}
+    )
     # The empirical correlation sum converges within 12 lags when turns decorrelate.
     assume(abs(turn_correlation(params)) < 0.5)
-    displacement, duration = cycle_displacements(params, np.random.default_rng(1), 4 * 10**5,
-                                                  pivot)
+    displacement, duration = cycle_displacements(params, np.random.default_rng(1), 4 * 10**5, pivot)
     assert diffusion_from_cycles(displacement, duration, lags=12) == pytest.approx(
-        renewal_diffusion(params, pivot), rel=0.03)
+        renewal_diffusion(params, pivot), rel=0.03
+    )
 
 
 def test_pivot_drive_turns_the_free_bot_about_its_pivot():
@@ -105,6 +122,7 @@ def test_pivot_drive_turns_the_free_bot_about_its_pivot():
     turning = np.flatnonzero((record.phase[:-1] == 0) & (record.phase[1:] == 0))
     assert turning.size > 10
     # Explicit Euler's error on the circle is O(dt); the pivot stays put to that order.
-    jumps = np.hypot(pivot_x[turning + 1] - pivot_x[turning],
-                     pivot_y[turning + 1] - pivot_y[turning])
+    jumps = np.hypot(
+        pivot_x[turning + 1] - pivot_x[turning], pivot_y[turning + 1] - pivot_y[turning]
+    )
     assert jumps.max() < 1e-3

@@ -63,7 +63,8 @@ def test_bending_energy_of_an_ellipse_scales_as_r_minus_3(radius, relative_eps):
     energy = total_energy(m, modes, np.zeros(3))
     k, l0 = m.params.bending_stiffness, m.params.membrane_length
     assert energy - 2 * math.pi * k / radius == pytest.approx(
-        68 * math.pi**4 * k * eps**2 / l0**3, rel=10 * relative_eps)
+        68 * math.pi**4 * k * eps**2 / l0**3, rel=10 * relative_eps
+    )
 
 
 def random_shape(m, rng, amplitude):
@@ -93,7 +94,7 @@ def test_forces_are_minus_the_gradient_of_the_discrete_energy(seed, radius, touc
         for unit in (1.0, 1j):
             delta = np.zeros_like(modes)
             delta[j] = h * unit
-            diff = (total_energy(m, modes + delta, pose) - total_energy(m, modes - delta, pose))
+            diff = total_energy(m, modes + delta, pose) - total_energy(m, modes - delta, pose)
             grad += unit * diff / (2 * h) if unit == 1.0 else 1j * diff / (2 * h)
         scale = np.abs(fhat).max()
         assert abs(grad - (-2 * np.pi * fhat[j])) <= 1e-5 * 2 * np.pi * scale
@@ -108,9 +109,11 @@ def test_forces_are_minus_the_gradient_of_the_discrete_energy(seed, radius, touc
 
         diff = (-energy(2) + 8 * energy(1) - 8 * energy(-1) + energy(-2)) / 12e-5
         # abs: the stencil's rounding error, ~1e-16 E / h
-        assert diff == pytest.approx(2 * np.pi / m.nodes * dpose[i], rel=1e-5,
-                                     abs=max(1e-7 * 2 * np.pi / m.nodes * np.abs(dpose).max(),
-                                             1e-9))
+        assert diff == pytest.approx(
+            2 * np.pi / m.nodes * dpose[i],
+            rel=1e-5,
+            abs=max(1e-7 * 2 * np.pi / m.nodes * np.abs(dpose).max(), 1e-9),
+        )
 
 
 @settings(max_examples=15)
@@ -144,11 +147,13 @@ def test_breathing_and_shape_relaxation_times(radius):
     jac, size = membrane_jacobian(m), 2 * m.cutoff + 1
     # The breathing mode Re g_1 is an eigenvector by symmetry; its rate is 1 / t_mem.
     breathing = -jac[m.cutoff + 1, m.cutoff + 1]
-    assert 1 / breathing == pytest.approx(p.membrane_friction / (8 * np.pi**2 * p.tension),
-                                          rel=0.01)
+    assert 1 / breathing == pytest.approx(
+        p.membrane_friction / (8 * np.pi**2 * p.tension), rel=0.01
+    )
     # The slowest non-zero rate is the n = 2 shape mode: 72 k / (5 gamma_mem R^4).
     rates = np.sort(-np.linalg.eigvals(jac).real)
     slow = rates[rates > 1e-6 * rates.max()][0]
-    assert 1 / slow == pytest.approx(5 * p.membrane_friction * radius**4
-                                     / (72 * p.bending_stiffness), rel=0.02)
+    assert 1 / slow == pytest.approx(
+        5 * p.membrane_friction * radius**4 / (72 * p.bending_stiffness), rel=0.02
+    )
     assert jac.shape == (2 * size, 2 * size)

@@ -29,11 +29,18 @@ def _dataset(radius=4.0, realization=0, n_time=6, seed=3):
     rng = np.random.default_rng(realization)
     shape = (1, n_time)
     return simulation_dataset(
-        np.arange(n_time) * 0.01, np.array([realization]),
-        membrane_x=rng.normal(size=(*shape, 40)), membrane_y=rng.normal(size=(*shape, 40)),
-        bot_x=rng.normal(size=shape), bot_y=rng.normal(size=shape),
-        bot_angle=rng.normal(size=shape), bot_phase=rng.integers(0, 2, size=shape),
-        parameters=Parameters({"radius": radius}), seed=seed, components={"integrator": "x"})
+        np.arange(n_time) * 0.01,
+        np.array([realization]),
+        membrane_x=rng.normal(size=(*shape, 40)),
+        membrane_y=rng.normal(size=(*shape, 40)),
+        bot_x=rng.normal(size=shape),
+        bot_y=rng.normal(size=shape),
+        bot_angle=rng.normal(size=shape),
+        bot_phase=rng.integers(0, 2, size=shape),
+        parameters=Parameters({"radius": radius}),
+        seed=seed,
+        components={"integrator": "x"},
+    )
 
 
 def test_same_dataset_gives_same_bytes(tmp_path):
@@ -60,8 +67,13 @@ def test_validate_names_every_problem():
     ds["bot_angle"] = ds["bot_angle"].transpose("time", "realization")
     del ds.attrs["softcell_seed"]
     found = problems(ds)
-    for needle in ("bot_x: missing", "bot_y: units 'm'", "cell_x: attribute 'long_name'",
-                   "bot_angle: dims", "softcell_seed"):
+    for needle in (
+        "bot_x: missing",
+        "bot_y: units 'm'",
+        "cell_x: attribute 'long_name'",
+        "bot_angle: dims",
+        "softcell_seed",
+    ):
         assert any(needle in p for p in found), (needle, found)
     with pytest.raises(SchemaError, match="bot_x: missing"):
         validate(ds)
@@ -78,8 +90,9 @@ def test_directory_of_a_sweep_opens_as_one_dataset(tmp_path):
     for radius in (4.0, 8.0):
         for realization in (0, 1):
             n_time = 6 if radius == 4.0 else 9
-            write_dataset(_dataset(radius, realization, n_time),
-                          tmp_path / f"r{radius}_{realization}.nc")
+            write_dataset(
+                _dataset(radius, realization, n_time), tmp_path / f"r{radius}_{realization}.nc"
+            )
     (tmp_path / ".half-written.nc.123.tmp").write_bytes(b"garbage")
     ds = open_dataset(tmp_path)
     assert ds.sizes == {"radius": 2, "realization": 2, "time": 9, "node": 40}
@@ -91,8 +104,9 @@ def test_directory_of_a_sweep_opens_as_one_dataset(tmp_path):
     assert (ds["bot_phase"].sel(radius=4.0).values[:, 6:] == -1).all()
     assert ds["bot_phase"].dtype == np.int8
     single = read_dataset(tmp_path / "r8.0_1.nc")
-    xr.testing.assert_equal(ds["bot_x"].sel(radius=8.0, realization=1),
-                            single["bot_x"].isel(realization=0))
+    xr.testing.assert_equal(
+        ds["bot_x"].sel(radius=8.0, realization=1), single["bot_x"].isel(realization=0)
+    )
     assert not problems(ds)
 
 

@@ -68,6 +68,12 @@ def test_attrs_round_trip():
 def test_sweep_expands_row_major_and_validates_every_point():
     points = expand_sweep({"radius": [4, 8], "tension": [0.01, 0.02, 0.03]})
     assert [(s["radius"], s["tension"]) for s, _ in points] == [
-        (4.0, 0.01), (4.0, 0.02), (4.0, 0.03), (8.0, 0.01), (8.0, 0.02), (8.0, 0.03)]
+        (4.0, 0.01),
+        (4.0, 0.02),
+        (4.0, 0.03),
+        (8.0, 0.01),
+        (8.0, 0.02),
+        (8.0, 0.03),
+    ]
     with pytest.raises(ParameterError, match="radius"):
         expand_sweep({"radius": [4, 2]})

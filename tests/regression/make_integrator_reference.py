@@ -37,9 +37,15 @@ def main() -> None:
         arrays[f"{key}_pose"] = result.record.pose
         print(f"R = {radius:g} cm: {result.wall:.1f} s wall", flush=True)
     with atomic_write(OUT) as tmp:
-        np.savez_compressed(tmp, radii=np.array(RADII), duration=DURATION, seed=SEED,
-                            version=__version__, command=" ".join(["python", *sys.argv]),
-                            **arrays)
+        np.savez_compressed(
+            tmp,
+            radii=np.array(RADII),
+            duration=DURATION,
+            seed=SEED,
+            version=__version__,
+            command=" ".join(["python", *sys.argv]),
+            **arrays,
+        )
 
 
 if __name__ == "__main__":

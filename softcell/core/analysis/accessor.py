@@ -51,8 +51,13 @@ class SoftcellAccessor:
 
         x, y = self._ds[f"{self._check(body)}_x"], self._ds[f"{body}_y"]
         values = speed(x.values, y.values, self._ds["time"].values)
-        return xr.DataArray(values, dims=x.dims, coords=x.coords, name=f"{body}_speed",
-                            attrs={"units": "cm s-1", "long_name": f"{body} speed"})
+        return xr.DataArray(
+            values,
+            dims=x.dims,
+            coords=x.coords,
+            name=f"{body}_speed",
+            attrs={"units": "cm s-1", "long_name": f"{body} speed"},
+        )
 
     def ipr(self) -> xr.DataArray:
         """Shape index P / sqrt(A) of the membrane per sample (2 sqrt(pi) for a circle): of
@@ -63,8 +68,13 @@ class SoftcellAccessor:
         smooth = self._ds.attrs.get("softcell_origin", "simulation") == "simulation"
         values = shape_index(mx.values, self._ds["membrane_y"].values, band_limited=smooth)
         dims = mx.dims[:-1]
-        return xr.DataArray(values, dims=dims, coords={d: mx[d] for d in dims if d in mx.coords},
-                            name="ipr", attrs={"units": "1", "long_name": "shape index"})
+        return xr.DataArray(
+            values,
+            dims=dims,
+            coords={d: mx[d] for d in dims if d in mx.coords},
+            name="ipr",
+            attrs={"units": "1", "long_name": "shape index"},
+        )
 
     def geometric_center(self, method: str = "mean") -> tuple[xr.DataArray, xr.DataArray]:
         """The membrane's GC (cm): ``"mean"`` of the points (simulations) or the area
@@ -79,8 +89,10 @@ class SoftcellAccessor:
             dims = mx.dims[:-1]
             coords = {d: mx[d] for d in dims if d in mx.coords}
             attrs = {"units": "cm", "long_name": "membrane area centroid"}
-            return (xr.DataArray(cx, dims=dims, coords=coords, attrs=attrs),
-                    xr.DataArray(cy, dims=dims, coords=coords, attrs=attrs))
+            return (
+                xr.DataArray(cx, dims=dims, coords=coords, attrs=attrs),
+                xr.DataArray(cy, dims=dims, coords=coords, attrs=attrs),
+            )
         raise ValueError(f"method = {method!r} is not allowed: must be 'mean' or 'centroid'")
 
     def _check(self, body: str) -> str:

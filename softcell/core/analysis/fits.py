@@ -32,8 +32,7 @@ class PowerFit:
     points: int
 
 
-def power_fit(lag: np.ndarray, msd: np.ndarray, exponent: float, lo: float, hi: float
-              ) -> PowerFit:
+def power_fit(lag: np.ndarray, msd: np.ndarray, exponent: float, lo: float, hi: float) -> PowerFit:
     """Least squares of log MSD = log c + exponent log tau over lo <= tau <= hi (s)."""
     lag = np.asarray(lag, dtype=np.float64)
     msd = np.asarray(msd, dtype=np.float64)
@@ -69,20 +68,22 @@ def crossover_time(velocity: float, slope: float) -> float:
     return slope / velocity**2 if velocity > 0 else np.nan
 
 
-def confined_square_msd(lag: np.ndarray, diffusion: float, side: float,
-                        terms: int = CONFINED_TERMS) -> np.ndarray:
+def confined_square_msd(
+    lag: np.ndarray, diffusion: float, side: float, terms: int = CONFINED_TERMS
+) -> np.ndarray:
     """MSD (cm^2) of a Brownian particle with diffusion coefficient D (cm^2/s, MSD -> 4 D tau
     at short lags) in a square of side L (cm), averaged over a uniform start
     (SI:EQ:MSD_confined): L^2/3 - (32 L^2 / pi^4) sum_p exp(-pi^2 D tau (2p+1)^2 / L^2)
     / (2p+1)^4, p = 0..terms-1."""
     lag = np.asarray(lag, dtype=np.float64)
     odd = 2.0 * np.arange(terms) + 1.0
-    decay = np.exp(-np.pi**2 * diffusion * np.multiply.outer(lag, odd**2) / side**2)
+    decay = np.exp(-(np.pi**2) * diffusion * np.multiply.outer(lag, odd**2) / side**2)
     return side**2 / 3 - 32 * side**2 / np.pi**4 * (decay / odd**4).sum(axis=-1)
 
 
-def confined_square_fit(lag, msd, side: float, lo: float = 0.0, hi: float = np.inf
-                        ) -> tuple[float, int]:
+def confined_square_fit(
+    lag, msd, side: float, lo: float = 0.0, hi: float = np.inf
+) -> tuple[float, int]:
     """D (cm^2/s) of the confined-square formula fitted in log space over lo <= tau <= hi,
     and the number of lags used."""
     lag = np.asarray(lag, dtype=np.float64)
@@ -98,8 +99,9 @@ def confined_square_fit(lag, msd, side: float, lo: float = 0.0, hi: float = np.i
 
     # A first guess from the shortest lag (MSD ~ 4 D tau), then a bounded search around it.
     guess = np.log(msd[use][0] / (4 * t[0]))
-    best = optimize.minimize_scalar(cost, bounds=(guess - 12, guess + 12), method="bounded",
-                                    options={"xatol": 1e-10})
+    best = optimize.minimize_scalar(
+        cost, bounds=(guess - 12, guess + 12), method="bounded", options={"xatol": 1e-10}
+    )
     return float(np.exp(best.x)), n
 
 

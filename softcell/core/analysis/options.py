@@ -16,38 +16,101 @@ from softcell.core.analysis.stopgo import THRESHOLD
 from softcell.core.params import ParameterSpec, suggest
 from softcell.errors import ConfigError
 
-ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {s.name: s for s in (
-    ParameterSpec("discard", 15.0, "s", "initial time left out of every statistic",
-                  minimum=0.0, minimum_inclusive=True),
-    ParameterSpec("short_lag_max", 1.0, "s",
-                  "lags below this come from the finest sampling segment only", minimum=0.0),
-    ParameterSpec("lags_per_decade", 20, "1", "MSD lags per decade (log-spaced)", kind=int,
-                  minimum=1, minimum_inclusive=True),
-    ParameterSpec("max_lag_fraction", 0.5, "1", "longest MSD lag as a fraction of the record",
-                  minimum=0.0, maximum=1.0),
-    ParameterSpec("ballistic_window", 0.1, "1",
-                  "ballistic fit over lags <= this times the mean go time", minimum=0.0),
-    ParameterSpec("diffusive_window", 10.0, "1",
-                  "diffusive fit over lags >= this times the mean go time", minimum=0.0),
-    ParameterSpec("confined_side", 100.0, "cm", "side L of the confined-square MSD formula",
-                  minimum=0.0),
-    ParameterSpec("detector", "threshold", "1", "stop/go detector (a plugin name)", kind=str),
-    ParameterSpec("stopgo_segments", "all", "1",
-                  "sampling segments whose complete phases enter the stop/go statistics: "
-                  "'all', or only the 'finest' (a coarse interval misses short phases)",
-                  kind=str, choices=("all", "finest")),
-    dataclasses.replace(THRESHOLD, default=None, long_name=(
-        "stop/go speed threshold (default: 0.3 for tracked videos, the detector's "
-        "0.03 for simulations)"), minimum_inclusive=True),
-    ParameterSpec("threshold_shift", 0.1, "cm s-1",
-                  "the threshold is also moved by -/+ this to show how the means move",
-                  minimum=0.0, minimum_inclusive=True),
-    ParameterSpec("coupled_below", 0.35, "1",
-                  "coupled regime: mean bot-cell GC distance below this times R", minimum=0.0),
-    ParameterSpec("decoupled_above", 0.5, "1",
-                  "decoupled regime: mean bot-cell GC distance above this times R",
-                  minimum=0.0),
-)}
+ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
+    s.name: s
+    for s in (
+        ParameterSpec(
+            "discard",
+            15.0,
+            "s",
+            "initial time left out of every statistic",
+            minimum=0.0,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "short_lag_max",
+            1.0,
+            "s",
+            "lags below this come from the finest sampling segment only",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "lags_per_decade",
+            20,
+            "1",
+            "MSD lags per decade (log-spaced)",
+            kind=int,
+            minimum=1,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "max_lag_fraction",
+            0.5,
+            "1",
+            "longest MSD lag as a fraction of the record",
+            minimum=0.0,
+            maximum=1.0,
+        ),
+        ParameterSpec(
+            "ballistic_window",
+            0.1,
+            "1",
+            "ballistic fit over lags <= this times the mean go time",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "diffusive_window",
+            10.0,
+            "1",
+            "diffusive fit over lags >= this times the mean go time",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "confined_side", 100.0, "cm", "side L of the confined-square MSD formula", minimum=0.0
+        ),
+        ParameterSpec("detector", "threshold", "1", "stop/go detector (a plugin name)", kind=str),
+        ParameterSpec(
+            "stopgo_segments",
+            "all",
+            "1",
+            "sampling segments whose complete phases enter the stop/go statistics: "
+            "'all', or only the 'finest' (a coarse interval misses short phases)",
+            kind=str,
+            choices=("all", "finest"),
+        ),
+        dataclasses.replace(
+            THRESHOLD,
+            default=None,
+            long_name=(
+                "stop/go speed threshold (default: 0.3 for tracked videos, the detector's "
+                "0.03 for simulations)"
+            ),
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "threshold_shift",
+            0.1,
+            "cm s-1",
+            "the threshold is also moved by -/+ this to show how the means move",
+            minimum=0.0,
+            minimum_inclusive=True,
+        ),
+        ParameterSpec(
+            "coupled_below",
+            0.35,
+            "1",
+            "coupled regime: mean bot-cell GC distance below this times R",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "decoupled_above",
+            0.5,
+            "1",
+            "decoupled regime: mean bot-cell GC distance above this times R",
+            minimum=0.0,
+        ),
+    )
+}
 
 
 def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
@@ -63,8 +126,7 @@ def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
     given = {k: v for k, v in (values or {}).items() if v is not None}
     for name in given:
         if name not in ANALYSIS_OPTIONS:
-            raise ConfigError(f"unknown analysis option {name!r}"
-                              f"{suggest(name, ANALYSIS_OPTIONS)}")
+            raise ConfigError(f"unknown analysis option {name!r}{suggest(name, ANALYSIS_OPTIONS)}")
     out: dict[str, Any] = {}
     for name, spec in ANALYSIS_OPTIONS.items():
         if name in given:
@@ -75,13 +137,20 @@ def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
     if out["coupled_below"] > out["decoupled_above"]:
         from softcell.errors import ParameterError
 
-        raise ParameterError("coupled_below", out["coupled_below"],
-                             f"must be <= decoupled_above = {out['decoupled_above']:g}", "1")
+        raise ParameterError(
+            "coupled_below",
+            out["coupled_below"],
+            f"must be <= decoupled_above = {out['decoupled_above']:g}",
+            "1",
+        )
     return out
 
 
 def options_attrs(options: Mapping[str, Any]) -> dict[str, str]:
     """File attributes of the options: JSON values and units."""
-    return {"softcell_analysis_options": json.dumps(dict(options), sort_keys=True),
-            "softcell_analysis_option_units": json.dumps(
-                {k: ANALYSIS_OPTIONS[k].unit for k in options}, sort_keys=True)}
+    return {
+        "softcell_analysis_options": json.dumps(dict(options), sort_keys=True),
+        "softcell_analysis_option_units": json.dumps(
+            {k: ANALYSIS_OPTIONS[k].unit for k in options}, sort_keys=True
+        ),
+    }

@@ -44,8 +44,9 @@ def require(ds: xr.Dataset, names: tuple[str, ...] = REQUIRED) -> None:
     """Raise one SoftcellError naming every variable of ``names`` that ``ds`` lacks."""
     missing = [n for n in ("time", "realization", *names) if n not in ds.variables]
     if missing:
-        raise SoftcellError("the analysis needs variable(s) missing from the dataset: "
-                            + ", ".join(missing))
+        raise SoftcellError(
+            "the analysis needs variable(s) missing from the dataset: " + ", ".join(missing)
+        )
 
 
 def sweep_dims(ds: xr.Dataset) -> list[str]:
@@ -84,8 +85,10 @@ class LagPlan:
     def __init__(self, time: np.ndarray, options: Mapping[str, Any]) -> None:
         segs = segments(time)
         if not segs or time.size < 2:
-            raise SoftcellError(f"the record after the discard of {options['discard']:g} s has "
-                                f"{time.size} sample(s); the analysis needs at least 2")
+            raise SoftcellError(
+                f"the record after the discard of {options['discard']:g} s has "
+                f"{time.size} sample(s); the analysis needs at least 2"
+            )
         self.fine = max(segs, key=lambda s: (-s.interval, s.last - s.first))
         self.coarse_interval = max(s.interval for s in segs)
         per_decade = int(options["lags_per_decade"])
@@ -102,10 +105,12 @@ class LagPlan:
             self.fine_lags = log_lags(1, last_short, per_decade)
             self.grid = decimation(time, self.coarse_interval, float(time[0]))
             first_long = int(np.ceil(short / self.coarse_interval - 1e-9))
-            self.coarse_lags = log_lags(first_long, int(fraction * (self.grid.size - 1)),
-                                        per_decade)
-        self.lag = np.concatenate([self.fine_lags * self.fine.interval,
-                                   self.coarse_lags * self.coarse_interval])
+            self.coarse_lags = log_lags(
+                first_long, int(fraction * (self.grid.size - 1)), per_decade
+            )
+        self.lag = np.concatenate(
+            [self.fine_lags * self.fine.interval, self.coarse_lags * self.coarse_interval]
+        )
 
     def sums(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Squared-displacement sums and pair counts at ``self.lag`` for one trajectory."""
@@ -120,12 +125,12 @@ class LagPlan:
         return np.concatenate(parts_s), np.concatenate(parts_c)
 
 
-def _ensemble_msd(plan: LagPlan, x: np.ndarray, y: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _ensemble_msd(
+    plan: LagPlan, x: np.ndarray, y: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Pooled MSD over realizations [Rz, T] (sum of squares over sum of pairs), its standard
     error across realizations, the pairs, and the per-realization MSDs."""
-    sums, pairs = zip(*(plan.sums(xr_, yr_) for xr_, yr_ in zip(x, y, strict=True)),
-                      strict=True)
+    sums, pairs = zip(*(plan.sums(xr_, yr_) for xr_, yr_ in zip(x, y, strict=True)), strict=True)
     sums, pairs = np.array(sums), np.array(pairs)
     with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # lags with < 2 realizations
@@ -133,13 +138,11 @@ def _ensemble_msd(plan: LagPlan, x: np.ndarray, y: np.ndarray
         total = pairs.sum(axis=0)
         pooled = np.where(total > 0, sums.sum(axis=0) / np.where(total > 0, total, 1), np.nan)
         n = np.isfinite(each).sum(axis=0)
-        sem = np.where(n >= 2, np.nanstd(each, axis=0, ddof=1) / np.sqrt(np.maximum(n, 1)),
-                       np.nan)
+        sem = np.where(n >= 2, np.nanstd(each, axis=0, ddof=1) / np.sqrt(np.maximum(n, 1)), np.nan)
     return pooled, sem, total, each
 
 
-def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndarray
-              ) -> np.ndarray:
+def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """Collapse metric per variant: mean over a common grid of the standard deviation across
     curves of log10(MSD R^a) at equal log10(lag R^b), over lags up to ``ends`` (the start of
     each curve's diffusive window: the ballistic and crossover range). NaN with < 2 curves."""
@@ -164,11 +167,25 @@ def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndar
 
 
 #: Per-(point, body) scalars of :func:`_body_statistics` (float, NaN when undefined).
-SCALARS = ("mean_speed", "v0_hat", "mean_go_duration", "mean_stop_duration", "go_fraction",
-           "go_ks_statistic", "go_ks_pvalue", "stop_ks_statistic", "stop_ks_pvalue",
-           "ballistic_velocity", "ballistic_velocity_error", "msd_slope", "msd_slope_error",
-           "crossover_time", "confined_diffusion_coefficient", "ballistic_window_end",
-           "diffusive_window_start")
+SCALARS = (
+    "mean_speed",
+    "v0_hat",
+    "mean_go_duration",
+    "mean_stop_duration",
+    "go_fraction",
+    "go_ks_statistic",
+    "go_ks_pvalue",
+    "stop_ks_statistic",
+    "stop_ks_pvalue",
+    "ballistic_velocity",
+    "ballistic_velocity_error",
+    "msd_slope",
+    "msd_slope_error",
+    "crossover_time",
+    "confined_diffusion_coefficient",
+    "ballistic_window_end",
+    "diffusive_window_start",
+)
 
 
 class _Setup:
@@ -185,15 +202,21 @@ class _Setup:
         self.detector = _detector(opts["detector"], threshold)
         self.threshold = self.detector.params.get("threshold", threshold)
         self.shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
-        self.shifted = [_detector(opts["detector"], self.threshold + s)
-                        if self.threshold is not None and self.threshold + s >= 0 else None
-                        for s in self.shifts]
+        self.shifted = [
+            _detector(opts["detector"], self.threshold + s)
+            if self.threshold is not None and self.threshold + s >= 0
+            else None
+            for s in self.shifts
+        ]
         time_all = np.asarray(ds["time"].values, dtype=np.float64)
         self.keep = time_all >= time_all[0] + opts["discard"]
         self.time = time_all[self.keep]
         self.plan = LagPlan(self.time, opts)
-        self.only = segments(self.time).index(self.plan.fine) \
-            if opts["stopgo_segments"] == "finest" else None
+        self.only = (
+            segments(self.time).index(self.plan.fine)
+            if opts["stopgo_segments"] == "finest"
+            else None
+        )
         self.lead = sweep_dims(ds)
         self.points = _points(ds, self.lead)
 
@@ -221,8 +244,9 @@ class _Results:
         self.durations: dict[tuple[int, int, int], np.ndarray] = {}
 
 
-def _body_statistics(setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray,
-                     y: np.ndarray) -> None:
+def _body_statistics(
+    setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray, y: np.ndarray
+) -> None:
     """Speeds, stop/go, MSD and fits of one body (positions x, y [realization, time], cm)
     at point i, into row (i, b) of ``res``."""
     time, opts, plan, only = setup.time, setup.opts, setup.plan, setup.only
@@ -244,18 +268,25 @@ def _body_statistics(setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray
         out[f"{name}_ks_statistic"][i, b], out[f"{name}_ks_pvalue"][i, b] = stat, p
     for k, det in enumerate(setup.shifted):
         if det is not None:
-            dk = d if setup.shifts[k] == 0 else stopgo.durations(
-                stopgo.label(det, s, time), time, only)
+            dk = (
+                d
+                if setup.shifts[k] == 0
+                else stopgo.durations(stopgo.label(det, s, time), time, only)
+            )
             res.shifted_go[i, b, k] = dk.mean(stopgo.GO)
             res.shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
-    fine_speed = s[:, plan.fine.first:plan.fine.last]
+    fine_speed = s[:, plan.fine.first : plan.fine.last]
     finite = fine_speed[np.isfinite(fine_speed)]
     out["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
     out["v0_hat"][i, b] = fits.v0_hat(fine_speed)
 
     pooled, sem, pairs, each = _ensemble_msd(plan, x, y)
-    res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = \
-        pooled, sem, pairs, each
+    res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = (
+        pooled,
+        sem,
+        pairs,
+        each,
+    )
     tau_g = out["mean_go_duration"][i, b]
     hi = opts["ballistic_window"] * tau_g
     lo = opts["diffusive_window"] * tau_g
@@ -267,7 +298,8 @@ def _body_statistics(setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray
         out["msd_slope"][i, b], out["msd_slope_error"][i, b] = slope, slope_err
         out["crossover_time"][i, b] = fits.crossover_time(v, slope)
         out["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
-            plan.lag, pooled, opts["confined_side"], lo)[0]
+            plan.lag, pooled, opts["confined_side"], lo
+        )[0]
 
 
 def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> None:
@@ -283,16 +315,21 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
     mx = sel["membrane_x"].transpose("realization", "time", "node")
     my = sel["membrane_y"].transpose("realization", "time", "node")
     for r in range(res.ipr.shape[1]):
-        res.ipr[i, r] = shape_index(np.asarray(mx[r].values)[keep], np.asarray(my[r].values)[keep],
-                                    band_limited=setup.origin == "simulation")
+        res.ipr[i, r] = shape_index(
+            np.asarray(mx[r].values)[keep],
+            np.asarray(my[r].values)[keep],
+            band_limited=setup.origin == "simulation",
+        )
     (cx, cy), (bx, by) = pos["cell"], pos["bot"]
     with np.errstate(invalid="ignore"):
-        res.gc_distance[i] = np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(
-            bx - cx).any() else np.nan
+        res.gc_distance[i] = (
+            np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(bx - cx).any() else np.nan
+        )
 
 
-def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray
-                       ) -> tuple[dict[str, Any], np.ndarray]:
+def _pooled_statistics(
+    setup: _Setup, res: _Results, radius: np.ndarray
+) -> tuple[dict[str, Any], np.ndarray]:
     """What needs every point: durations along ``event``, PDFs of t/<t> on common bins, the
     theory, and the regime of each point. Returns every variable of the analysis by name, and
     the edges of the PDF bins."""
@@ -301,7 +338,7 @@ def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray
     durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
     largest = 0.0
     for (i, b, kind), values in res.durations.items():
-        durations[kind][i, b, :values.size] = values
+        durations[kind][i, b, : values.size] = values
         if values.size and values.mean() > 0:
             largest = max(largest, float((values / values.mean()).max()))
     edges = stopgo.pdf_edges(largest)
@@ -319,48 +356,86 @@ def _pooled_statistics(setup: _Setup, res: _Results, radius: np.ndarray
         ratio = res.gc_distance / radius
     regime = np.full(len(setup.points), REGIMES["unknown"], dtype=np.int8)
     regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
-    regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = \
-        REGIMES["intermediate"]
+    regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = REGIMES[
+        "intermediate"
+    ]
     regime[ratio >= opts["decoupled_above"]] = REGIMES["decoupled"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a point with no membrane: NaN
         ipr_mean = np.nanmean(res.ipr, axis=(1, 2))
     return {
-        "msd": res.msd, "msd_sem": res.msd_sem, "msd_pairs": res.msd_pairs,
-        "msd_realization": res.msd_each, "msd_theory": msd_theory, "speed": res.speeds,
-        "stopgo_label": res.labels, "go_duration": durations[stopgo.GO],
-        "stop_duration": durations[stopgo.STOP], "go_pdf": pdfs[stopgo.GO],
-        "stop_pdf": pdfs[stopgo.STOP], "mean_go_duration_shifted": res.shifted_go,
-        "mean_stop_duration_shifted": res.shifted_stop, **res.scalars,
-        "go_events": res.go_events, "stop_events": res.stop_events,
+        "msd": res.msd,
+        "msd_sem": res.msd_sem,
+        "msd_pairs": res.msd_pairs,
+        "msd_realization": res.msd_each,
+        "msd_theory": msd_theory,
+        "speed": res.speeds,
+        "stopgo_label": res.labels,
+        "go_duration": durations[stopgo.GO],
+        "stop_duration": durations[stopgo.STOP],
+        "go_pdf": pdfs[stopgo.GO],
+        "stop_pdf": pdfs[stopgo.STOP],
+        "mean_go_duration_shifted": res.shifted_go,
+        "mean_stop_duration_shifted": res.shifted_stop,
+        **res.scalars,
+        "go_events": res.go_events,
+        "stop_events": res.stop_events,
         "diffusion_coefficient": res.scalars["msd_slope"] / 4,
-        "msd_slope_theory": 2 * v0_hat ** 2 * tau_g, "ipr": res.ipr, "ipr_mean": ipr_mean,
-        "gc_distance": res.gc_distance, "gc_distance_ratio": ratio, "regime": regime,
+        "msd_slope_theory": 2 * v0_hat**2 * tau_g,
+        "ipr": res.ipr,
+        "ipr_mean": ipr_mean,
+        "gc_distance": res.gc_distance,
+        "gc_distance_ratio": ratio,
+        "regime": regime,
     }, edges
 
 
-def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any],
-                      edges: np.ndarray) -> xr.Dataset:
+def _analysis_dataset(
+    ds: xr.Dataset, setup: _Setup, values: dict[str, Any], edges: np.ndarray
+) -> xr.Dataset:
     """The analysis Dataset of ``softcell.core.schema.ANALYSIS_VARIABLES``, back on the
     sweep's dims."""
     lead = setup.lead
     lead_shape = tuple(ds.sizes[d] for d in lead)
-    out = xr.Dataset(coords={
-        "body": ("body", np.array(BODIES), {"long_name": "moving body: cell (membrane GC) or "
-                                            "bot"}),
-        "lag": ("lag", setup.plan.lag, {"units": "s", "long_name": "time lag"}),
-        "realization": ("realization", np.asarray(ds["realization"].values),
-                        {"units": "1", "long_name": "realization index"}),
-        "time": ("time", setup.time, {"units": "s", "long_name": "time since the start of "
-                                      "the record"}),
-        "event": ("event", np.arange(values["go_duration"].shape[-1]),
-                  {"units": "1", "long_name": "phase index"}),
-        "scaled_duration": ("scaled_duration", 0.5 * (edges[1:] + edges[:-1]),
-                            {"units": "1", "long_name": "phase duration over its mean, bin "
-                             "center", "bin_width": stopgo.PDF_BIN}),
-        "threshold_shift": ("threshold_shift", setup.shifts,
-                            {"units": "cm s-1", "long_name": "shift of the stop/go threshold"}),
-    })
+    out = xr.Dataset(
+        coords={
+            "body": (
+                "body",
+                np.array(BODIES),
+                {"long_name": "moving body: cell (membrane GC) or bot"},
+            ),
+            "lag": ("lag", setup.plan.lag, {"units": "s", "long_name": "time lag"}),
+            "realization": (
+                "realization",
+                np.asarray(ds["realization"].values),
+                {"units": "1", "long_name": "realization index"},
+            ),
+            "time": (
+                "time",
+                setup.time,
+                {"units": "s", "long_name": "time since the start of the record"},
+            ),
+            "event": (
+                "event",
+                np.arange(values["go_duration"].shape[-1]),
+                {"units": "1", "long_name": "phase index"},
+            ),
+            "scaled_duration": (
+                "scaled_duration",
+                0.5 * (edges[1:] + edges[:-1]),
+                {
+                    "units": "1",
+                    "long_name": "phase duration over its mean, bin center",
+                    "bin_width": stopgo.PDF_BIN,
+                },
+            ),
+            "threshold_shift": (
+                "threshold_shift",
+                setup.shifts,
+                {"units": "cm s-1", "long_name": "shift of the stop/go threshold"},
+            ),
+        }
+    )
     for d in lead:
         out.coords[d] = (d, ds[d].values, dict(ds[d].attrs))
     for name, coord in ds.coords.items():  # e.g. duration along radius
@@ -373,29 +448,48 @@ def _analysis_dataset(ds: xr.Dataset, setup: _Setup, values: dict[str, Any],
     return out
 
 
-def _collapse_variables(out: xr.Dataset, setup: _Setup, values: dict[str, Any],
-                        radius: np.ndarray) -> None:
+def _collapse_variables(
+    out: xr.Dataset, setup: _Setup, values: dict[str, Any], radius: np.ndarray
+) -> None:
     """The scaling-collapse variants of a radius sweep, over its decoupled radii."""
     decoupled = values["regime"] == REGIMES["decoupled"]
-    metric = _collapse(setup.plan.lag, values["msd"][decoupled, 0], radius[decoupled],
-                       values["diffusive_window_start"][decoupled, 0])
+    metric = _collapse(
+        setup.plan.lag,
+        values["msd"][decoupled, 0],
+        radius[decoupled],
+        values["diffusive_window_start"][decoupled, 0],
+    )
     names = [f"msd R^{a:+.3g}, lag R^{b:+.3g}" for a, b in COLLAPSE_VARIANTS]
-    out.coords["collapse_variant"] = ("collapse_variant", np.array(names),
-                                      {"long_name": "scaling-collapse variant"})
-    out["collapse_msd_exponent"] = ("collapse_variant", [a for a, _ in COLLAPSE_VARIANTS],
-                                    {"units": "1", "long_name": "exponent a of R^a on "
-                                     "the MSD"})
-    out["collapse_lag_exponent"] = ("collapse_variant", [b for _, b in COLLAPSE_VARIANTS],
-                                    {"units": "1", "long_name": "exponent b of R^b on "
-                                     "the lag"})
-    out["collapse_metric"] = ("collapse_variant", metric, {
-        "units": "1", "long_name": "mean spread (decades) of the rescaled cell MSDs of "
-        "the decoupled radii over the ballistic and crossover lags",
-        "radii": radius[decoupled]})
+    out.coords["collapse_variant"] = (
+        "collapse_variant",
+        np.array(names),
+        {"long_name": "scaling-collapse variant"},
+    )
+    out["collapse_msd_exponent"] = (
+        "collapse_variant",
+        [a for a, _ in COLLAPSE_VARIANTS],
+        {"units": "1", "long_name": "exponent a of R^a on the MSD"},
+    )
+    out["collapse_lag_exponent"] = (
+        "collapse_variant",
+        [b for _, b in COLLAPSE_VARIANTS],
+        {"units": "1", "long_name": "exponent b of R^b on the lag"},
+    )
+    out["collapse_metric"] = (
+        "collapse_variant",
+        metric,
+        {
+            "units": "1",
+            "long_name": "mean spread (decades) of the rescaled cell MSDs of "
+            "the decoupled radii over the ballistic and crossover lags",
+            "radii": radius[decoupled],
+        },
+    )
 
 
-def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
-            progress: bool = False) -> xr.Dataset:
+def analyze(
+    ds: xr.Dataset, options: Mapping[str, Any] | None = None, *, progress: bool = False
+) -> xr.Dataset:
     """Analyse a simulation or tracked Dataset (docs/model.md §6).
 
     Parameters
@@ -427,8 +521,9 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
     setup = _Setup(ds, options)
     res = _Results(setup, ds.sizes["realization"])
     radius = np.array([_radius(ds, p) for p in setup.points])
-    for i, point in enumerate(tqdm(setup.points, disable=not progress, desc="analysis",
-                                   unit="point")):
+    for i, point in enumerate(
+        tqdm(setup.points, disable=not progress, desc="analysis", unit="point")
+    ):
         _point_statistics(setup, res, i, ds.isel(point) if point else ds)
     values, edges = _pooled_statistics(setup, res, radius)
     out = _analysis_dataset(ds, setup, values, edges)
@@ -436,15 +531,27 @@ def analyze(ds: xr.Dataset, options: Mapping[str, Any] | None = None, *,
         _collapse_variables(out, setup, values, radius)
     opts = setup.opts
     out.attrs = {
-        "Conventions": "CF-1.8", "title": "soft robotic cell analysis",
-        "source": f"softcell {__version__} analysis", "softcell_version": __version__,
-        "softcell_origin": "analysis", "softcell_input_origin": setup.origin,
+        "Conventions": "CF-1.8",
+        "title": "soft robotic cell analysis",
+        "source": f"softcell {__version__} analysis",
+        "softcell_version": __version__,
+        "softcell_origin": "analysis",
+        "softcell_input_origin": setup.origin,
         "softcell_detector": opts["detector"],
         "softcell_threshold": np.nan if setup.threshold is None else float(setup.threshold),
         **options_attrs(opts),
-        **{k: v for k, v in ds.attrs.items() if k in (
-            "softcell_parameters", "softcell_parameter_units", "softcell_seed",
-            "softcell_components", "softcell_swept_parameters")},
+        **{
+            k: v
+            for k, v in ds.attrs.items()
+            if k
+            in (
+                "softcell_parameters",
+                "softcell_parameter_units",
+                "softcell_seed",
+                "softcell_components",
+                "softcell_swept_parameters",
+            )
+        },
         **parameter_attrs(json.loads(ds.attrs.get("softcell_parameters", "{}"))),
     }
     return out

@@ -38,8 +38,10 @@ def segments(time: np.ndarray) -> list[Segment]:
         raise ValueError("time must increase strictly")
     changes = np.flatnonzero(np.abs(np.diff(steps)) > INTERVAL_TOLERANCE * steps[:-1]) + 1
     bounds = [0, *changes.tolist(), steps.size]
-    return [Segment(a, b, float(np.mean(steps[a:b]))) for a, b in zip(bounds[:-1], bounds[1:],
-                                                                       strict=True)]
+    return [
+        Segment(a, b, float(np.mean(steps[a:b])))
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    ]
 
 
 def segment_index(time: np.ndarray) -> np.ndarray:
@@ -47,7 +49,7 @@ def segment_index(time: np.ndarray) -> np.ndarray:
     segment). Labels of sample i describe the motion from t_i to t_(i+1)."""
     index = np.zeros(np.size(time), dtype=np.int64)
     for k, seg in enumerate(segments(time)):
-        index[seg.first:] = k
+        index[seg.first :] = k
     return index
 
 
@@ -74,14 +76,16 @@ def decimation(time: np.ndarray, interval: float, start: float) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     grid = start + interval * np.arange(count)
     nearest = np.clip(np.searchsorted(time, grid), 1, time.size - 1)
-    left = np.where(np.abs(time[nearest - 1] - grid) <= np.abs(time[nearest] - grid),
-                    nearest - 1, nearest)
+    left = np.where(
+        np.abs(time[nearest - 1] - grid) <= np.abs(time[nearest] - grid), nearest - 1, nearest
+    )
     hit = np.abs(time[left] - grid) <= INTERVAL_TOLERANCE * interval
     return np.where(hit, left, -1)
 
 
-def polygon_area_perimeter_centroid(x: np.ndarray, y: np.ndarray
-                                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def polygon_area_perimeter_centroid(
+    x: np.ndarray, y: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Signed area (cm^2), perimeter (cm) and area centroid (cm) of closed polygons whose
     vertices run along the last axis (shoelace formulas)."""
     x = np.asarray(x, dtype=np.float64)
@@ -112,7 +116,7 @@ def smooth_area_perimeter(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.
     fine = np.zeros((*z.shape[:-1], 4 * n), dtype=np.complex128)
     half = (n + 1) // 2
     fine[..., :half] = (1j * k * modes)[..., :half]
-    fine[..., half - n:] = (1j * k * modes)[..., half:]
+    fine[..., half - n :] = (1j * k * modes)[..., half:]
     tangent = np.fft.ifft(fine, axis=-1) * (4 * n)
     return area, 2 * np.pi * np.abs(tangent).mean(axis=-1)
 

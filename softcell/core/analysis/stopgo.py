@@ -21,9 +21,13 @@ from softcell.kernels.runs import phases
 #: The paper's speed thresholds (cm/s): 0.03 for its simulations, 0.3 for its experiments.
 SIMULATION_THRESHOLD, EXPERIMENT_THRESHOLD = 0.03, 0.3
 #: The threshold detector's parameter (the analysis option ``threshold`` overrides it).
-THRESHOLD = ParameterSpec("threshold", SIMULATION_THRESHOLD, "cm s-1",
-                          "speed below which a sample is stop (0.3 for experiments)",
-                          minimum=0.0)
+THRESHOLD = ParameterSpec(
+    "threshold",
+    SIMULATION_THRESHOLD,
+    "cm s-1",
+    "speed below which a sample is stop (0.3 for experiments)",
+    minimum=0.0,
+)
 #: Width of the bins of the PDFs of t / <t> (the paper's 0.25).
 PDF_BIN = 0.25
 
@@ -65,8 +69,9 @@ def durations(labels: np.ndarray, time: np.ndarray, only: int | None = None) -> 
             duration, value = duration[seg[start] == only], value[seg[start] == only]
         go.append(duration[value == GO])
         stop.append(duration[value == STOP])
-    return Durations(np.concatenate(go) if go else np.zeros(0),
-                     np.concatenate(stop) if stop else np.zeros(0))
+    return Durations(
+        np.concatenate(go) if go else np.zeros(0), np.concatenate(stop) if stop else np.zeros(0)
+    )
 
 
 def scaled_pdf(values: np.ndarray, edges: np.ndarray) -> np.ndarray:

@@ -29,8 +29,28 @@ from softcell.core.engine.state import (
 from softcell.core.plugin.contracts import Stepper
 from softcell.errors import SimulationError
 
-__all__ = ["HESSIAN_ARGS", "PARTIALS_ARGS", "Model", "Record", "SimulationError", "Stepper",
-           "build_integrator", "build_model", "check_state", "circle_modes",
-           "compose_hessians", "compose_partials", "equilibrium_radius", "explicit_decay_rate",
-           "fd_drive_jacobian", "fd_hessian", "force_modes", "initial_state",
-           "membrane_jacobian", "membrane_length", "phase_at", "sample_times", "total_energy"]
+__all__ = [
+    "HESSIAN_ARGS",
+    "PARTIALS_ARGS",
+    "Model",
+    "Record",
+    "SimulationError",
+    "Stepper",
+    "build_integrator",
+    "build_model",
+    "check_state",
+    "circle_modes",
+    "compose_hessians",
+    "compose_partials",
+    "equilibrium_radius",
+    "explicit_decay_rate",
+    "fd_drive_jacobian",
+    "fd_hessian",
+    "force_modes",
+    "initial_state",
+    "membrane_jacobian",
+    "membrane_length",
+    "phase_at",
+    "sample_times",
+    "total_energy",
+]

@@ -153,16 +153,22 @@ def _fingerprint(name: str, value: object) -> str:
         func = value.py_func
         qualname = func.__qualname__
         if "<locals>" in qualname or "<lambda>" in qualname:
-            raise NotCacheable(f"{func.__module__}.{qualname} is a closure: its behaviour "
-                               "depends on values the cache cannot see")
+            raise NotCacheable(
+                f"{func.__module__}.{qualname} is a closure: its behaviour "
+                "depends on values the cache cannot see"
+            )
         top = func.__module__.split(".")[0]
         if sys.modules.get(func.__module__) is None or top == "__main__":
-            raise NotCacheable(f"{func.__module__}.{qualname} is not defined in an "
-                               "importable module")
-        return (f"{name}={func.__module__}:{qualname}:{_package_hash(top)}:"
-                f"{_distribution_version(top)}")
-    raise TypeError(f"cannot bind {name!r} = {value!r} into a compiled module: only "
-                    "compiled functions and scalars can be bound")
+            raise NotCacheable(
+                f"{func.__module__}.{qualname} is not defined in an importable module"
+            )
+        return (
+            f"{name}={func.__module__}:{qualname}:{_package_hash(top)}:{_distribution_version(top)}"
+        )
+    raise TypeError(
+        f"cannot bind {name!r} = {value!r} into a compiled module: only "
+        "compiled functions and scalars can be bound"
+    )
 
 
 #: Imports of generated sources that the environment's versions already cover.
@@ -185,8 +191,10 @@ def _imported_packages(source: str) -> list[str]:
 
 
 def _environment() -> str:
-    return (f"softcell={__version__}:{_package_hash('softcell')};numba={numba.__version__};"
-            f"numpy={np.__version__};python={sys.version};{platform.machine()}")
+    return (
+        f"softcell={__version__}:{_package_hash('softcell')};numba={numba.__version__};"
+        f"numpy={np.__version__};python={sys.version};{platform.machine()}"
+    )
 
 
 def environment_key() -> str:
@@ -205,8 +213,10 @@ def entry_key(source: str, bindings: Mapping[str, object]) -> str:
     """
     parts = [_environment(), source]
     parts += [_fingerprint(n, bindings[n]) for n in sorted(bindings)]
-    parts += [f"import {top}:{_package_hash(top)}:{_distribution_version(top)}"
-              for top in _imported_packages(source)]
+    parts += [
+        f"import {top}:{_package_hash(top)}:{_distribution_version(top)}"
+        for top in _imported_packages(source)
+    ]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 
@@ -289,22 +299,35 @@ def _prepare_entry(folder: Path, source: str, label: str, description: str) -> N
         else:
             problem = _numba_files_ok(folder / "__pycache__")
     if problem is not None:
-        warnings.warn(f"softcell: the compiled-model cache entry {folder} is corrupt "
-                      f"({problem}); rebuilding it", CacheWarning, stacklevel=4)
+        warnings.warn(
+            f"softcell: the compiled-model cache entry {folder} is corrupt "
+            f"({problem}); rebuilding it",
+            CacheWarning,
+            stacklevel=4,
+        )
         shutil.rmtree(folder / "__pycache__", ignore_errors=True)
         path.unlink(missing_ok=True)
     folder.mkdir(parents=True, exist_ok=True)
     if not path.exists():
-        meta = {"label": label, "description": description, "softcell": __version__,
-                "numba": numba.__version__, "environment": environment_key(),
-                "created": datetime.datetime.now().isoformat(timespec="seconds")}
+        meta = {
+            "label": label,
+            "description": description,
+            "softcell": __version__,
+            "numba": numba.__version__,
+            "environment": environment_key(),
+            "created": datetime.datetime.now().isoformat(timespec="seconds"),
+        }
         _write_atomic(folder / "entry.json", json.dumps(meta, indent=1) + "\n")
-        _write_atomic(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n"
-                      + source)
+        _write_atomic(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n" + source)
 
 
-def _execute(name: str, filename: str, source: str, bindings: Mapping[str, object],
-             flags: Mapping[str, object]) -> types.ModuleType:
+def _execute(
+    name: str,
+    filename: str,
+    source: str,
+    bindings: Mapping[str, object],
+    flags: Mapping[str, object],
+) -> types.ModuleType:
     if _PARENT not in sys.modules:
         parent = types.ModuleType(_PARENT)
         parent.__path__ = []  # a namespace for the generated modules, so pickles find them
@@ -323,12 +346,18 @@ def _execute(name: str, filename: str, source: str, bindings: Mapping[str, objec
 
 def _in_memory(label: str, source: str, bindings: Mapping[str, object]) -> types.ModuleType:
     """The module compiled in this process only (not cacheable or no writable cache)."""
-    return _execute(f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
-                    f"<softcell {label}>", source, bindings, _UNCACHED)
+    return _execute(
+        f"{_PARENT}.{label.replace('-', '_')}_{id(source)}",
+        f"<softcell {label}>",
+        source,
+        bindings,
+        _UNCACHED,
+    )
 
 
-def compile_module(label: str, source: str, bindings: Mapping[str, object],
-                   description: str = "") -> types.ModuleType:
+def compile_module(
+    label: str, source: str, bindings: Mapping[str, object], description: str = ""
+) -> types.ModuleType:
     """The module of generated ``source`` run with ``bindings`` in its namespace, its compiled
     functions cached on disk.
 
@@ -356,8 +385,11 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
     try:
         key = entry_key(source, bindings)
     except NotCacheable as reason:
-        warnings.warn(f"softcell: {label} is compiled in this process only, not cached on "
-                      f"disk: {reason}", CacheWarning, stacklevel=2)
+        warnings.warn(
+            f"softcell: {label} is compiled in this process only, not cached on disk: {reason}",
+            CacheWarning,
+            stacklevel=2,
+        )
         return _in_memory(label, source, bindings)
     folder = cache_dir() / f"{label}-{key[:20]}"
     with _LOCK:
@@ -366,10 +398,13 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
         try:
             _prepare_entry(folder, source, label, description)
         except OSError as error:
-            warnings.warn(f"softcell: cannot write the compiled-model cache at {folder.parent} "
-                          f"({error.strerror or error}); {label} is compiled in this process "
-                          f"only (set {CACHE_ENV} to a writable folder)", CacheWarning,
-                          stacklevel=2)
+            warnings.warn(
+                f"softcell: cannot write the compiled-model cache at {folder.parent} "
+                f"({error.strerror or error}); {label} is compiled in this process "
+                f"only (set {CACHE_ENV} to a writable folder)",
+                CacheWarning,
+                stacklevel=2,
+            )
             return _in_memory(label, source, bindings)
         name = f"{_PARENT}.{label.replace('-', '_')}_{key[:20]}"
         module = _execute(name, str(folder / SOURCE), source, bindings, _CACHED)
@@ -380,8 +415,9 @@ def compile_module(label: str, source: str, bindings: Mapping[str, object],
         return module
 
 
-def compiled_function(label: str, source: str, name: str, bindings: Mapping[str, object],
-                      description: str = "") -> Callable[..., object]:
+def compiled_function(
+    label: str, source: str, name: str, bindings: Mapping[str, object], description: str = ""
+) -> Callable[..., object]:
     """The compiled function ``name`` of :func:`compile_module`'s module."""
     return getattr(compile_module(label, source, bindings, description), name)
 
@@ -399,9 +435,16 @@ def entries(root: Path | None = None) -> list[Entry]:
         except (OSError, ValueError):
             meta = {}
         size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
-        out.append(Entry(folder, str(meta.get("label", "?")),
-                         str(meta.get("description", "")), str(meta.get("created", "?")),
-                         size, meta.get("environment") != current))
+        out.append(
+            Entry(
+                folder,
+                str(meta.get("label", "?")),
+                str(meta.get("description", "")),
+                str(meta.get("created", "?")),
+                size,
+                meta.get("environment") != current,
+            )
+        )
     return sorted(out, key=lambda e: e.created)
 
 

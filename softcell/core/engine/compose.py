@@ -12,11 +12,14 @@ from importlib import resources
 
 from softcell.core.engine.compiled import compile_module, compiled_function
 
-PARTIALS_ARGS = ("x, y, xp, yp, xpp, ypp, pose, context, coefficients, "
-                 "p0x, p0y, p1x, p1y, p2x, p2y, dpose")
+PARTIALS_ARGS = (
+    "x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose"
+)
 
-HESSIAN_ARGS = ("w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
-                "pose_tmp, hww, hwp, hpp")
+HESSIAN_ARGS = (
+    "w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
+    "pose_tmp, hww, hwp, hpp"
+)
 
 _PREAMBLE = "from numba import njit\n\n\n"
 
@@ -38,22 +41,33 @@ def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., No
     Its signature is that of a term kernel, except that ``coefficients`` is a tuple holding
     one coefficient array per term.
     """
-    calls = [f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
-             for i in range(len(kernels))] or ["    pass"]
-    source = (_PREAMBLE + f"@njit(**JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
-              + "\n".join(calls) + "\n")
+    calls = [
+        f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
+        for i in range(len(kernels))
+    ] or ["    pass"]
+    source = (
+        _PREAMBLE
+        + f"@njit(**JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
+        + "\n".join(calls)
+        + "\n"
+    )
     bindings = {f"k{i}": k for i, k in enumerate(kernels)}
-    return compiled_function("partials", source, "total_partials", bindings,
-                             _names(kernels) or "no energy terms")
+    return compiled_function(
+        "partials", source, "total_partials", bindings, _names(kernels) or "no energy terms"
+    )
 
 
 def fd_hessian(partials: Callable[..., None]) -> Callable[..., None]:
     """The documented fallback for an energy term without analytic second derivatives:
     central differences of its partials kernel, ``fd_hessian(HESSIAN_ARGS)`` (see the
     template's docstring for the steps), *adding* into ``hww``, ``hwp`` and ``hpp``."""
-    return compiled_function("fd-hessian", template(__package__ + ".templates",
-                                                    "fd_hessian.py"),
-                             "fd_hessian", {"partials": partials}, _names([partials]))
+    return compiled_function(
+        "fd-hessian",
+        template(__package__ + ".templates", "fd_hessian.py"),
+        "fd_hessian",
+        {"partials": partials},
+        _names([partials]),
+    )
 
 
 def compose_hessians(terms) -> Callable[..., None]:
@@ -70,8 +84,10 @@ def compose_hessians(terms) -> Callable[..., None]:
         kernel = term.hessian_kernel()
         if kernel is not None:
             bindings[f"h{i}"] = kernel
-            lines.append(f"    h{i}(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, "
-                         f"coefficients[{i}], hww, hwp, hpp)")
+            lines.append(
+                f"    h{i}(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, "
+                f"coefficients[{i}], hww, hwp, hpp)"
+            )
             names.append(_names([kernel]))
         else:
             bindings[f"h{i}"] = fd_hessian(term.partials_kernel())
@@ -81,17 +97,22 @@ def compose_hessians(terms) -> Callable[..., None]:
     if len(lines) == 1:
         lines.append("    pass")
     source = _PREAMBLE + "\n".join(lines) + "\n"
-    return compiled_function("hessians", source, "total_hessian", bindings,
-                             " + ".join(names) or "no energy terms")
+    return compiled_function(
+        "hessians", source, "total_hessian", bindings, " + ".join(names) or "no energy terms"
+    )
 
 
 def fd_drive_jacobian(drive: Callable[..., None]) -> Callable[..., None]:
     """d drive / d pose by central differences of the drive kernel, ``drive_jacobian(phase,
     datum, pose, context, drive_coefficients, steps, pose_tmp, plus, minus, out)`` with
     ``out[c, d]`` = d drive_c / d pose_d (steps ``steps[6:9]`` in cm, cm, rad)."""
-    return compiled_function("fd-drive", template(__package__ + ".templates",
-                                                  "fd_drive_jacobian.py"),
-                             "drive_jacobian", {"drive": drive}, _names([drive]))
+    return compiled_function(
+        "fd-drive",
+        template(__package__ + ".templates", "fd_drive_jacobian.py"),
+        "drive_jacobian",
+        {"drive": drive},
+        _names([drive]),
+    )
 
 
 BOT_ARGS = "pose, context, coefficients, dpose"
@@ -117,8 +138,12 @@ def compose_bot(terms) -> tuple[Callable[..., None], Callable[..., None]]:
         hessian = term.bot_hessian_kernel()
         if hessian is None:
             bindings[f"bh{i}"] = compiled_function(
-                "fd-bot-hessian", template(__package__ + ".templates", "fd_bot_hessian.py"),
-                "fd_bot_hessian", {"bot": kernel}, _names([kernel]))
+                "fd-bot-hessian",
+                template(__package__ + ".templates", "fd_bot_hessian.py"),
+                "fd_bot_hessian",
+                {"bot": kernel},
+                _names([kernel]),
+            )
             args = BOT_HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
             hessians.append(f"    bh{i}({args})")
         else:

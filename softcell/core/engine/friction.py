@@ -11,27 +11,74 @@ import numpy as np
 from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import template
 
-LawWorkspace = namedtuple("LawWorkspace", [
-    "scale", "spec", "field", "fx", "fy", "vx", "vy", "vx_plus", "vy_plus", "fx_step",
-    "fy_step", "dxx", "dxy", "dyx", "dyy", "buf", "a_hat", "b_hat", "law", "rows", "fhat",
-    "vhat", "coefficients"])
+LawWorkspace = namedtuple(
+    "LawWorkspace",
+    [
+        "scale",
+        "spec",
+        "field",
+        "fx",
+        "fy",
+        "vx",
+        "vy",
+        "vx_plus",
+        "vy_plus",
+        "fx_step",
+        "fy_step",
+        "dxx",
+        "dxy",
+        "dyx",
+        "dyy",
+        "buf",
+        "a_hat",
+        "b_hat",
+        "law",
+        "rows",
+        "fhat",
+        "vhat",
+        "coefficients",
+    ],
+)
 
 
-def workspace(nodes: int, cutoff: int, unknowns: int, scale: float,
-              coefficients: np.ndarray) -> LawWorkspace:
+def workspace(
+    nodes: int, cutoff: int, unknowns: int, scale: float, coefficients: np.ndarray
+) -> LawWorkspace:
     """Scratch arrays of the law on ``nodes`` points for 2 ``cutoff`` + 1 modes and a
     Jacobian of ``unknowns`` columns; ``scale`` = 2 pi / l0 (cm^-1); ``coefficients`` the
     law's."""
     m = 2 * cutoff + 1
     c = np.complex128
     return LawWorkspace(
-        scale=np.array([scale]), spec=np.zeros(nodes, c), field=np.zeros(nodes, c),
-        **{k: np.zeros(nodes) for k in ("fx", "fy", "vx", "vy", "vx_plus", "vy_plus",
-                                         "fx_step", "fy_step", "dxx", "dxy", "dyx", "dyy")},
-        buf=np.zeros(nodes, c), a_hat=np.zeros(4 * cutoff + 1, c),
-        b_hat=np.zeros(4 * cutoff + 1, c), law=np.zeros((2 * m, 2 * m)),
-        rows=np.zeros((2 * m, unknowns)), fhat=np.zeros(m, c), vhat=np.zeros(m, c),
-        coefficients=np.ascontiguousarray(coefficients, dtype=np.float64))
+        scale=np.array([scale]),
+        spec=np.zeros(nodes, c),
+        field=np.zeros(nodes, c),
+        **{
+            k: np.zeros(nodes)
+            for k in (
+                "fx",
+                "fy",
+                "vx",
+                "vy",
+                "vx_plus",
+                "vy_plus",
+                "fx_step",
+                "fy_step",
+                "dxx",
+                "dxy",
+                "dyx",
+                "dyy",
+            )
+        },
+        buf=np.zeros(nodes, c),
+        a_hat=np.zeros(4 * cutoff + 1, c),
+        b_hat=np.zeros(4 * cutoff + 1, c),
+        law=np.zeros((2 * m, 2 * m)),
+        rows=np.zeros((2 * m, unknowns)),
+        fhat=np.zeros(m, c),
+        vhat=np.zeros(m, c),
+        coefficients=np.ascontiguousarray(coefficients, dtype=np.float64),
+    )
 
 
 def compiled_friction(law) -> ModuleType:
@@ -40,11 +87,16 @@ def compiled_friction(law) -> ModuleType:
     lw)`` and ``jacobian(jac, lw)``, with ``lw`` from :func:`workspace`."""
     derivative = law.derivative_kernel()
     velocity = law.velocity_kernel()
-    return compile_module("friction", template(__package__ + ".templates", "friction.py"), {
-        "law_velocity": velocity,
-        "law_derivative": derivative if derivative is not None else velocity,
-        "ANALYTIC": derivative is not None,
-    }, f"friction law {law.name}")
+    return compile_module(
+        "friction",
+        template(__package__ + ".templates", "friction.py"),
+        {
+            "law_velocity": velocity,
+            "law_derivative": derivative if derivative is not None else velocity,
+            "ANALYTIC": derivative is not None,
+        },
+        f"friction law {law.name}",
+    )
 
 
 def law_nodes(nodes: int, cutoff: int) -> int:
@@ -57,8 +109,13 @@ def law_nodes(nodes: int, cutoff: int) -> int:
 
 def model_workspace(model, unknowns: int) -> LawWorkspace:
     """:func:`workspace` for ``model``'s law on :func:`law_nodes` points."""
-    return workspace(law_nodes(model.nodes, model.cutoff), model.cutoff, unknowns,
-                     model.force_scale, model.friction_coefficients)
+    return workspace(
+        law_nodes(model.nodes, model.cutoff),
+        model.cutoff,
+        unknowns,
+        model.force_scale,
+        model.friction_coefficients,
+    )
 
 
 def mobility(model) -> float:

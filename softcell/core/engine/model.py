@@ -94,8 +94,14 @@ class Model:
         apply the law's kernel)."""
         return self.has_membrane and self.friction is not None and not self.friction.linear
 
-def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
-                membrane: bool = True, friction_law: str = "viscous") -> Model:
+
+def build_model(
+    params: Parameters,
+    energy_terms: Sequence[str],
+    protocol: str,
+    membrane: bool = True,
+    friction_law: str = "viscous",
+) -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
 
     Parameters
@@ -131,20 +137,35 @@ def build_model(params: Parameters, energy_terms: Sequence[str], protocol: str,
         coefficients = (np.zeros(1),)
     l0 = params.membrane_length
     return Model(
-        params=params, terms=terms, protocol=drive, partials=compose_partials(kernels),
-        coefficients=coefficients, drive=drive.drive_kernel(),
+        params=params,
+        terms=terms,
+        protocol=drive,
+        partials=compose_partials(kernels),
+        coefficients=coefficients,
+        drive=drive.drive_kernel(),
         drive_coefficients=np.ascontiguousarray(drive.coefficients()),
         context=np.array([l0, float(params.bot_semi_major), float(params.bot_semi_minor)]),
         membrane_mobility=2 * math.pi / (float(params.membrane_friction) * l0),
-        bot_mobility=np.array([1 / float(params.bot_friction), 1 / float(params.bot_friction),
-                               1 / float(params.bot_rotational_friction)]),
-        nodes=int(params.nodes), cutoff=int(params.cutoff), friction=friction,
+        bot_mobility=np.array(
+            [
+                1 / float(params.bot_friction),
+                1 / float(params.bot_friction),
+                1 / float(params.bot_rotational_friction),
+            ]
+        ),
+        nodes=int(params.nodes),
+        cutoff=int(params.cutoff),
+        friction=friction,
         friction_coefficients=np.ascontiguousarray(friction.coefficients()),
         force_scale=2 * math.pi / l0,
         membrane=membrane,
-        names={"energy_terms": [t.name for t in terms],
-               "driving_protocol": protocol, "friction_law": friction_law},
+        names={
+            "energy_terms": [t.name for t in terms],
+            "driving_protocol": protocol,
+            "friction_law": friction_law,
+        },
     )
+
 
 def build_integrator(name: str, params: Parameters) -> Integrator:
     """Instantiate the named integrator (its ``check`` runs on ``params``)."""

@@ -21,8 +21,8 @@ def _curve(modes: np.ndarray, n: int) -> np.ndarray:
         spectrum[order, k % n] = (1j * k) ** order * modes
     return np.fft.ifft(spectrum, axis=1) * n
 
-def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+
+def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Force modes and bot reaction for one state, with numpy FFTs (set-up, checks, tests).
 
     Returns
@@ -37,25 +37,39 @@ def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray
     z, zp, zpp = _curve(modes, n)
     parts = np.zeros((6, n))
     dpose = np.zeros(3)
-    model.partials(z.real.copy(), z.imag.copy(), zp.real.copy(), zp.imag.copy(),
-                   zpp.real.copy(), zpp.imag.copy(), np.asarray(pose, dtype=np.float64),
-                   model.context, model.coefficients, *parts, dpose)
+    model.partials(
+        z.real.copy(),
+        z.imag.copy(),
+        zp.real.copy(),
+        zp.imag.copy(),
+        zpp.real.copy(),
+        zpp.imag.copy(),
+        np.asarray(pose, dtype=np.float64),
+        model.context,
+        model.coefficients,
+        *parts,
+        dpose,
+    )
     q = np.fft.fft(parts[0::2] + 1j * parts[1::2], axis=1)[:, k % n] / n
     return -q[0] + 1j * k * q[1] + (k * k) * q[2], dpose
+
 
 def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
     """E = (2 pi / N) sum_n e_n over all terms (N cm), from the terms' ``density``."""
     n = model.nodes
     z, zp, zpp = _curve(modes, n)
-    e = sum(t.density(z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag, pose)
-            for t in model.terms)
+    e = sum(
+        t.density(z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag, pose) for t in model.terms
+    )
     return float(2 * np.pi / n * np.sum(e))
+
 
 def explicit_decay_rate(model: Model) -> float:
     """Largest decay rate lambda_max (1/s) of the linearized explicit membrane update at the
     equilibrium circle (docs/model.md §2): the explicit Euler step is stable for dt lambda < 2.
     """
     return float(np.max(-np.linalg.eigvals(membrane_jacobian(model)).real))
+
 
 def membrane_jacobian(model: Model) -> np.ndarray:
     """Jacobian (1/s) of d(Re g, Im g)/dt at the equilibrium circle, bot at its center.

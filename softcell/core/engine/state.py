@@ -21,6 +21,7 @@ from softcell.errors import SimulationError
 if TYPE_CHECKING:
     from softcell.core.engine.model import Model
 
+
 def equilibrium_radius(params: Parameters) -> float:
     """Radius (cm) of the force-free circle: the root near l0 / 2 pi of
     4 pi alpha l0 R^3 - 2 alpha l0^2 R^2 - k = 0 (docs/model.md §3; the paper's cubic has a typo).
@@ -30,12 +31,14 @@ def equilibrium_radius(params: Parameters) -> float:
     real = roots[np.abs(roots.imag) < 1e-9 * abs(roots).max()].real
     return float(real[np.argmin(np.abs(real - l0 / (2 * math.pi)))])
 
+
 def circle_modes(radius: float, cutoff: int, center: complex = 0j) -> np.ndarray:
     """Fourier modes (complex128[2 cutoff + 1], cm) of a circle z = center + radius e^{i xi}."""
     modes = np.zeros(2 * cutoff + 1, dtype=np.complex128)
     modes[cutoff] = center
     modes[cutoff + 1] = radius
     return modes
+
 
 def sample_times(params: Parameters) -> np.ndarray:
     """The sampling grid (s): every ``sample_every`` before ``sample_switch``, then every
@@ -51,15 +54,18 @@ def sample_times(params: Parameters) -> np.ndarray:
         times = np.concatenate([times, switch + np.arange(n_late) * late])
     return times
 
+
 def phase_at(schedule: Schedule, times: np.ndarray) -> np.ndarray:
     """Phase code (int8) active at each time (s): the last phase started at or before it."""
     index = np.searchsorted(schedule.start, times, side="right") - 1
     return schedule.phase[np.clip(index, 0, None)]
 
+
 def membrane_length(modes: np.ndarray, points: int = 256) -> float:
     """Length (cm) of the curve with these Fourier modes, by the trapezoidal rule (spectrally
     accurate for a trigonometric polynomial)."""
     return float(2 * np.pi * _speeds(modes, points).mean())
+
 
 def _speeds(modes: np.ndarray, points: int) -> np.ndarray:
     """|dgamma/dxi| (cm) at ``points`` equally spaced xi of each row of modes
@@ -77,6 +83,7 @@ def _speeds(modes: np.ndarray, points: int) -> np.ndarray:
     speeds = np.abs(np.fft.ifft(spectrum, axis=-1) * points)
     return speeds.reshape(*modes.shape[:-1], points)
 
+
 @dataclass
 class Record:
     """What a realization produced, before it becomes a Dataset."""
@@ -87,9 +94,15 @@ class Record:
     phase: np.ndarray  # int8[T]
     state: dict[str, np.ndarray] | None = None  # the integrator's state after the last sample
 
-def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
-                times: np.ndarray | None = None, modes: np.ndarray | None = None,
-                pose: np.ndarray | None = None) -> None:
+
+def check_state(
+    state: dict[str, np.ndarray],
+    model: Model,
+    realization: object,
+    times: np.ndarray | None = None,
+    modes: np.ndarray | None = None,
+    pose: np.ndarray | None = None,
+) -> None:
     """Raise :class:`SimulationError` on a non-finite value or a membrane length off by more
     than BLOWUP_LENGTH_FRACTION of l0, naming the time, the realization and the quantity.
 
@@ -103,8 +116,10 @@ def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
         bad = ~np.all(np.isfinite(values), axis=-1)
         if bad.any():
             t = float(times[np.argmax(bad)])
-            raise SimulationError(f"realization {realization}: non-finite {name} at t = {t:g} s "
-                                  "(the run blew up; reduce dt or tighten the tolerances)")
+            raise SimulationError(
+                f"realization {realization}: non-finite {name} at t = {t:g} s "
+                "(the run blew up; reduce dt or tighten the tolerances)"
+            )
     if model.has_membrane:
         l0 = model.params.membrane_length
         lengths = 2 * np.pi * _speeds(modes, BLOWUP_CHECK_POINTS).mean(axis=-1)
@@ -114,10 +129,13 @@ def check_state(state: dict[str, np.ndarray], model: Model, realization: object,
             raise SimulationError(
                 f"realization {realization}: membrane length {lengths[i]:.6g} cm at "
                 f"t = {times[i]:g} s is off l0 = {l0:.6g} cm by more than "
-                f"{BLOWUP_LENGTH_FRACTION:.0%}")
+                f"{BLOWUP_LENGTH_FRACTION:.0%}"
+            )
 
-def initial_state(model: Model, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray,
-                                                                     Schedule]:
+
+def initial_state(
+    model: Model, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, Schedule]:
     """Draw the heading and the schedule (in that order) and set up the membrane at rest:
     the equilibrium circle centred on the bot (docs/model.md §5)."""
     heading = model.protocol.initial_heading(rng)

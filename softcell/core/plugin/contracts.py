@@ -70,8 +70,10 @@ class Component(ABC):
         """The component's parameter values, each in its declared unit, as a float64 array
         in the order of ``parameters`` (the layout its compiled kernel receives). String
         parameters are not included."""
-        return np.array([float(self.params[s.name]) for s in self.parameters if s.kind is not str],
-                        dtype=np.float64)
+        return np.array(
+            [float(self.params[s.name]) for s in self.parameters if s.kind is not str],
+            dtype=np.float64,
+        )
 
     @classmethod
     def contract_problems(cls) -> list[str]:
@@ -105,7 +107,7 @@ class EnergyTerm(Component):
     kernels = {
         "partials_kernel": f"void({', '.join([VECTOR] * 16)})",
         "hessian_kernel": f"void({', '.join([VECTOR] * 9)}, float64[:, :, ::1], "
-                          "float64[:, :, ::1], float64[:, ::1])",
+        "float64[:, :, ::1], float64[:, ::1])",
         "bot_kernel": f"void({', '.join([VECTOR] * 4)})",
         "bot_hessian_kernel": f"void({', '.join([VECTOR] * 3)}, float64[:, ::1])",
     }
@@ -196,8 +198,16 @@ class EnergyTerm(Component):
         return None
 
     @abstractmethod
-    def density(self, x: np.ndarray, y: np.ndarray, xp: np.ndarray, yp: np.ndarray,
-                xpp: np.ndarray, ypp: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    def density(
+        self,
+        x: np.ndarray,
+        y: np.ndarray,
+        xp: np.ndarray,
+        yp: np.ndarray,
+        xpp: np.ndarray,
+        ypp: np.ndarray,
+        pose: np.ndarray,
+    ) -> np.ndarray:
         """The energy density e_n (N cm per unit xi) at the N points, for checks and diagnostics.
 
         Arrays as in :meth:`partials_kernel`; returns float64[N].
@@ -335,16 +345,18 @@ class Stepper(ABC):
     """
 
     @abstractmethod
-    def start(self, modes: np.ndarray, pose: np.ndarray, schedule: Schedule
-              ) -> dict[str, np.ndarray]:
+    def start(
+        self, modes: np.ndarray, pose: np.ndarray, schedule: Schedule
+    ) -> dict[str, np.ndarray]:
         """The initial state for these modes (cm), pose (cm, cm, rad) and phase schedule."""
 
     @abstractmethod
     def advance(self, state: dict[str, np.ndarray], schedule: Schedule, t_end: float) -> None:
         """Advance ``state`` in place to time ``t_end`` (s)."""
 
-    def sample(self, state: dict[str, np.ndarray], schedule: Schedule, times: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:
+    def sample(
+        self, state: dict[str, np.ndarray], schedule: Schedule, times: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Advance ``state`` through the increasing ``times`` (s) and return the modes
         (complex128[K, 2 Lc + 1], cm) and poses (float64[K, 3]: cm, cm, rad) there.
 
@@ -416,14 +428,18 @@ def check_kernels(component: Component, origin: str) -> None:
         try:
             kernel.compile(signature)
         except Exception as exc:  # numba's TypingError, or TypeError for a wrong arity
-            raise ContractError(f"{where} does not compile for the contract's signature "
-                                f"{signature}: {_reason(exc)}") from None
+            raise ContractError(
+                f"{where} does not compile for the contract's signature {signature}: {_reason(exc)}"
+            ) from None
 
 
 def _reason(exc: Exception) -> str:
     """The informative part of numba's many-line message, on one line."""
     lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
-    lines = [line for line in lines if not line.startswith(("Failed in nopython mode",
-                                                            "During:", "<source missing"))]
+    lines = [
+        line
+        for line in lines
+        if not line.startswith(("Failed in nopython mode", "During:", "<source missing"))
+    ]
     text = " ".join(lines[:2]) or type(exc).__name__
     return text if len(text) <= 300 else text[:297] + "..."

@@ -32,9 +32,20 @@ ENTRY_POINT_GROUP = "softcell"
 DISABLE_ENV = "SOFTCELL_DISABLE_PLUGINS"
 
 #: Built-in plugin modules, registered through the same hooks as third-party plugins.
-BUILTIN_PLUGINS: tuple[str, ...] = tuple(f"softcell.plugins.{name}" for name in (
-    "bending", "tension", "contact", "arena", "run_and_tumble", "friction", "explicit_euler",
-    "rodas4", "threshold"))
+BUILTIN_PLUGINS: tuple[str, ...] = tuple(
+    f"softcell.plugins.{name}"
+    for name in (
+        "bending",
+        "tension",
+        "contact",
+        "arena",
+        "run_and_tumble",
+        "friction",
+        "explicit_euler",
+        "rodas4",
+        "threshold",
+    )
+)
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
 __all__ = ["KINDS", "PluginWarning", "Registered", "Registry", "get_registry", "registered"]
@@ -72,10 +83,13 @@ class Registry:
         When two components of one kind share a name.
     """
 
-    def __init__(self, entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
-                 disabled: Iterable[str] | None = None,
-                 extra_plugins: Iterable[tuple[str, object]] = (),
-                 builtins: tuple[str, ...] = BUILTIN_PLUGINS) -> None:
+    def __init__(
+        self,
+        entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
+        disabled: Iterable[str] | None = None,
+        extra_plugins: Iterable[tuple[str, object]] = (),
+        builtins: tuple[str, ...] = BUILTIN_PLUGINS,
+    ) -> None:
         if disabled is None:
             disabled = [s.strip() for s in os.environ.get(DISABLE_ENV, "").split(",")]
         self.disabled = frozenset(d for d in disabled if d)
@@ -89,8 +103,9 @@ class Registry:
         for module_name in builtins:
             short = module_name.rsplit(".", 1)[-1]
             if not self._is_disabled(short, module_name):
-                self._register(short, importlib.import_module(module_name),
-                               f"built-in ({module_name})")
+                self._register(
+                    short, importlib.import_module(module_name), f"built-in ({module_name})"
+                )
         for name, plugin in extra_plugins:
             if not self._is_disabled(name):
                 self._register(name, plugin, f"registered object {name!r}")
@@ -102,10 +117,13 @@ class Registry:
                 self._load_entry_point(ep)
         unmatched = sorted(d for d in self.disabled if _normal(d) not in self._blocked)
         if unmatched:
-            warnings.warn(f"{DISABLE_ENV} names {', '.join(map(repr, unmatched))}, which "
-                          "match no plugin (give an entry-point name, a distribution name or "
-                          "a built-in's name, as `softcell plugins` shows them)",
-                          PluginWarning, stacklevel=2)
+            warnings.warn(
+                f"{DISABLE_ENV} names {', '.join(map(repr, unmatched))}, which "
+                "match no plugin (give an entry-point name, a distribution name or "
+                "a built-in's name, as `softcell plugins` shows them)",
+                PluginWarning,
+                stacklevel=2,
+            )
         self.pm.check_pending()
         self._components = self._collect()
 
@@ -127,8 +145,11 @@ class Registry:
         reason = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
         self.skipped.append((plugin, reason))
         self.skipped_origins[plugin] = origin
-        warnings.warn(f"softcell plugin {plugin!r} from {origin} was skipped: {reason}",
-                      PluginWarning, stacklevel=3)
+        warnings.warn(
+            f"softcell plugin {plugin!r} from {origin} was skipped: {reason}",
+            PluginWarning,
+            stacklevel=3,
+        )
 
     def _load_entry_point(self, ep: importlib.metadata.EntryPoint) -> None:
         dist = getattr(ep, "dist", None)
@@ -153,8 +174,9 @@ class Registry:
                     raise TypeError(f"{hook_name} returned {type(result).__name__}, not a list")
                 for cls in result:
                     if not (isinstance(cls, type) and issubclass(cls, contract)):
-                        raise TypeError(f"{hook_name} returned {cls!r}, "
-                                        f"not a subclass of {contract.__name__}")
+                        raise TypeError(
+                            f"{hook_name} returned {cls!r}, not a subclass of {contract.__name__}"
+                        )
                     problems = cls.contract_problems()
                     if problems:
                         raise TypeError(f"{cls.__qualname__}: " + "; ".join(problems))
@@ -178,7 +200,8 @@ class Registry:
                         raise RegistryError(
                             f"two {kind} components are named {cls.name!r}: one from "
                             f"{other.origin}, one from {origin}; block one with "
-                            f"{DISABLE_ENV}={plugin_name} or {DISABLE_ENV}={other.plugin}")
+                            f"{DISABLE_ENV}={plugin_name} or {DISABLE_ENV}={other.plugin}"
+                        )
                     components[kind][cls.name] = Registered(cls, origin, plugin_name)
         return components
 
@@ -204,8 +227,7 @@ class Registry:
         table = self._kind(kind)
         if name not in table:
             have = ", ".join(sorted(table)) or "none"
-            raise ConfigError(f"no {kind} named {name!r}{suggest(name, table)}; "
-                              f"available: {have}")
+            raise ConfigError(f"no {kind} named {name!r}{suggest(name, table)}; available: {have}")
         return table[name].component
 
     def origin(self, kind: str, name: str) -> str:
@@ -216,8 +238,9 @@ class Registry:
 
     def parameter_specs(self) -> dict[str, ParameterSpec]:
         """Every parameter declared by a registered component, by name."""
-        return merge_specs(*(r.component.parameters for kind in self._components.values()
-                             for r in kind.values()))
+        return merge_specs(
+            *(r.component.parameters for kind in self._components.values() for r in kind.values())
+        )
 
     def __iter__(self) -> Iterator[Registered]:
         for kind in KINDS.values():
@@ -227,8 +250,9 @@ class Registry:
         try:
             return self._components[kind]
         except KeyError:
-            raise ConfigError(f"no component kind {kind!r}; kinds: "
-                              + ", ".join(KINDS.values())) from None
+            raise ConfigError(
+                f"no component kind {kind!r}; kinds: " + ", ".join(KINDS.values())
+            ) from None
 
 
 def _normal(name: str) -> str:

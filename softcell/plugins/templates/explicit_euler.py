@@ -18,9 +18,25 @@ from softcell.kernels.spectral import assemble, evaluate
 
 
 @njit(**JIT_FLAGS)
-def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
-            coefficients, context, drive_coefficients, mobility, bot_mobility,
-            n_nodes, membrane, law):
+def segment(
+    modes,
+    pose,
+    step,
+    phase_index,
+    n_steps,
+    dt,
+    starts,
+    phases,
+    data,
+    coefficients,
+    context,
+    drive_coefficients,
+    mobility,
+    bot_mobility,
+    n_nodes,
+    membrane,
+    law,
+):
     n = n_nodes
     spec = np.empty(n, dtype=np.complex128)
     z = np.empty(n, dtype=np.complex128)
@@ -57,8 +73,24 @@ def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
                 xpp[i] = zpp[i].real
                 ypp[i] = zpp[i].imag
             parts[:, :] = 0.0
-            partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                     parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], dpose)
+            partials(
+                x,
+                y,
+                xp,
+                yp,
+                xpp,
+                ypp,
+                pose,
+                context,
+                coefficients,
+                parts[0],
+                parts[1],
+                parts[2],
+                parts[3],
+                parts[4],
+                parts[5],
+                dpose,
+            )
             has_q0 = False
             for i in range(n):
                 q0[i] = parts[0, i] + 1j * parts[1, i]
@@ -76,8 +108,7 @@ def segment(modes, pose, step, phase_index, n_steps, dt, starts, phases, data,
             bot_drag[:] = 0.0
             bot_forces(pose, context, coefficients, bot_drag)
             for j in range(3):
-                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j]
-                                                   - bot_drag[j])
+                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j] - bot_drag[j])
         else:
             for j in range(3):
                 pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j])

@@ -30,8 +30,24 @@ def forces(modes, pose, order, context, coefficients, g):
     g.parts[:, :] = 0.0
     g.dpose[:] = 0.0
     p = g.parts
-    partials(g.w[0], g.w[1], g.w[2], g.w[3], g.w[4], g.w[5], pose, context, coefficients,
-             p[0], p[1], p[2], p[3], p[4], p[5], g.dpose)
+    partials(
+        g.w[0],
+        g.w[1],
+        g.w[2],
+        g.w[3],
+        g.w[4],
+        g.w[5],
+        pose,
+        context,
+        coefficients,
+        p[0],
+        p[1],
+        p[2],
+        p[3],
+        p[4],
+        p[5],
+        g.dpose,
+    )
     count = 0
     n_active = 0
     higher = False
@@ -74,14 +90,47 @@ def forces(modes, pose, order, context, coefficients, g):
 def grid_jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
     """Add the group's part of the Jacobian into ws.jac; g.w must hold the curve and
     g.active the points where the last :func:`forces` at this state found partials."""
-    hessian(g.w, pose, context, coefficients, ws.steps, g.saved, g.plus, g.minus,
-            ws.dplus, ws.dminus, ws.pose_tmp, g.hww, g.hwp, g.hpp)
+    hessian(
+        g.w,
+        pose,
+        context,
+        coefficients,
+        ws.steps,
+        g.saved,
+        g.plus,
+        g.minus,
+        ws.dplus,
+        ws.dminus,
+        ws.pose_tmp,
+        g.hww,
+        g.hwp,
+        g.hpp,
+    )
     if SCAN:
         n_active = active_points(g.hww, g.hwp, g.active)
     else:
         n_active = g.n_active[0]
-    assemble_jacobian(g.hww, g.hwp, g.hpp, (ws.modes.size - 1) // 2, mobility,
-                      bot_mobility, g.twiddle, g.index, g.active, n_active, g.buf_a,
-                      g.buf_b, g.scratch, g.cursor,
-                      ws.a_hat, ws.b_hat, ws.g_hat, ws.cal_a, ws.cal_b, ws.factors,
-                      ws.orders, ws.jac)
+    assemble_jacobian(
+        g.hww,
+        g.hwp,
+        g.hpp,
+        (ws.modes.size - 1) // 2,
+        mobility,
+        bot_mobility,
+        g.twiddle,
+        g.index,
+        g.active,
+        n_active,
+        g.buf_a,
+        g.buf_b,
+        g.scratch,
+        g.cursor,
+        ws.a_hat,
+        ws.b_hat,
+        ws.g_hat,
+        ws.cal_a,
+        ws.cal_b,
+        ws.factors,
+        ws.orders,
+        ws.jac,
+    )

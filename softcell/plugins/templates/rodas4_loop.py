@@ -50,12 +50,23 @@ from softcell.plugins.rodas4 import (
 
 
 @njit(**JIT_FLAGS)
-def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobility,
-        bot_mobility, membrane, ws):
+def rhs(
+    u,
+    phase,
+    datum,
+    out,
+    coefficients,
+    context,
+    drive_coefficients,
+    mobility,
+    bot_mobility,
+    membrane,
+    ws,
+):
     """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``.
     ``coefficients``: (smooth group's, other group's)."""
     m = ws.modes.size
-    pose = u[2 * m:]
+    pose = u[2 * m :]
     drag = ws.drag
     drag[:] = 0.0
     if membrane:
@@ -79,7 +90,7 @@ def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobilit
                 out[j] = lw.vhat[j].real
                 out[m + j] = lw.vhat[j].imag
     else:
-        out[:2 * m] = 0.0
+        out[: 2 * m] = 0.0
     if HAS_BOT_S:
         bot_forces_s(pose, context, coefficients[0], drag)
     if HAS_BOT_F:
@@ -90,12 +101,13 @@ def rhs(u, phase, datum, out, coefficients, context, drive_coefficients, mobilit
 
 
 @njit(**JIT_FLAGS)
-def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
-             bot_mobility, membrane, ws):
+def jacobian(
+    u, phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, membrane, ws
+):
     """The Jacobian at u into ``ws.jac``; the grids' ``w`` (and, with a nonlinear friction
     law, ``ws.law``) must hold what :func:`rhs` left there at u."""
     m = ws.modes.size
-    pose = u[2 * m:]
+    pose = u[2 * m :]
     ws.jac[:, :] = 0.0
     if membrane:
         if HAS_S:
@@ -104,8 +116,18 @@ def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobilit
             jacobian_f(pose, context, coefficients[1], mobility, bot_mobility, ws.fine, ws)
         if LAW:
             friction_jacobian(ws.jac, ws.law)
-    drive_jacobian(phase, datum, pose, context, drive_coefficients, ws.steps, ws.pose_tmp,
-                   ws.drv_plus, ws.drv_minus, ws.djac)
+    drive_jacobian(
+        phase,
+        datum,
+        pose,
+        context,
+        drive_coefficients,
+        ws.steps,
+        ws.pose_tmp,
+        ws.drv_plus,
+        ws.drv_minus,
+        ws.djac,
+    )
     for c in range(3):
         for d in range(3):
             ws.jac[2 * m + c, 2 * m + d] += bot_mobility[c] * ws.djac[c, d]
@@ -113,11 +135,13 @@ def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobilit
         hpp = ws.bot_hpp
         hpp[:, :] = 0.0
         if HAS_BOT_S:
-            bot_hessians_s(pose, context, coefficients[0], ws.steps, ws.pose_tmp, ws.dplus,
-                           ws.dminus, hpp)
+            bot_hessians_s(
+                pose, context, coefficients[0], ws.steps, ws.pose_tmp, ws.dplus, ws.dminus, hpp
+            )
         if HAS_BOT_F:
-            bot_hessians_f(pose, context, coefficients[1], ws.steps, ws.pose_tmp, ws.dplus,
-                           ws.dminus, hpp)
+            bot_hessians_f(
+                pose, context, coefficients[1], ws.steps, ws.pose_tmp, ws.dplus, ws.dminus, hpp
+            )
         for c in range(3):
             for d in range(3):
                 ws.jac[2 * m + c, 2 * m + d] -= bot_mobility[c] * hpp[c, d]
@@ -126,16 +150,58 @@ def jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobilit
 @njit(**JIT_FLAGS)
 def stage_rhs(y, out, args):
     """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
-    phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, \
-        membrane, ws = args
-    rhs(y, phase, datum, out, coefficients, context, drive_coefficients, mobility,
-        bot_mobility, membrane, ws)
+    (
+        phase,
+        datum,
+        coefficients,
+        context,
+        drive_coefficients,
+        mobility,
+        bot_mobility,
+        membrane,
+        ws,
+    ) = args
+    rhs(
+        y,
+        phase,
+        datum,
+        out,
+        coefficients,
+        context,
+        drive_coefficients,
+        mobility,
+        bot_mobility,
+        membrane,
+        ws,
+    )
 
 
 @njit(**JIT_FLAGS)
-def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, phases, data,  # noqa: C901
-               coefficients, context, drive_coefficients, mobility, bot_mobility,
-               membrane, atol, rtol, max_step, a, cc, hd, ws):
+def advance_to(
+    u,
+    clock,
+    phase_index,
+    counters,
+    dense,
+    t_end,
+    sample,
+    starts,
+    phases,
+    data,  # noqa: C901
+    coefficients,
+    context,
+    drive_coefficients,
+    mobility,
+    bot_mobility,
+    membrane,
+    atol,
+    rtol,
+    max_step,
+    a,
+    cc,
+    hd,
+    ws,
+):
     t = clock[T]
     p = phase_index[0]
     k = ws.k
@@ -147,10 +213,31 @@ def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, ph
     while t < t_end - eps:
         t_switch = starts[p + 1] if p + 1 < starts.size else np.inf
         phase, datum = phases[p], data[p]
-        rhs(u, phase, datum, ws.f0, coefficients, context, drive_coefficients, mobility,
-            bot_mobility, membrane, ws)
-        jacobian(u, phase, datum, coefficients, context, drive_coefficients, mobility,
-                 bot_mobility, membrane, ws)
+        rhs(
+            u,
+            phase,
+            datum,
+            ws.f0,
+            coefficients,
+            context,
+            drive_coefficients,
+            mobility,
+            bot_mobility,
+            membrane,
+            ws,
+        )
+        jacobian(
+            u,
+            phase,
+            datum,
+            coefficients,
+            context,
+            drive_coefficients,
+            mobility,
+            bot_mobility,
+            membrane,
+            ws,
+        )
         counters[RHS_CALLS] += 1
         counters[JACOBIANS] += 1
         while True:
@@ -163,14 +250,35 @@ def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, ph
                 return STEP_UNDERFLOW
             if not factor_iteration_matrix(ws.jac, h, GAMMA, mat, ws.pivots):
                 return SINGULAR
-            stages(stage_rhs, (phase, datum, coefficients, context, drive_coefficients,
-                               mobility, bot_mobility, membrane, ws),
-                   u, ws.f0, h, a, cc, mat, ws.pivots, k, y, force)
+            stages(
+                stage_rhs,
+                (
+                    phase,
+                    datum,
+                    coefficients,
+                    context,
+                    drive_coefficients,
+                    mobility,
+                    bot_mobility,
+                    membrane,
+                    ws,
+                ),
+                u,
+                ws.f0,
+                h,
+                a,
+                cc,
+                mat,
+                ws.pivots,
+                k,
+                y,
+                force,
+            )
             counters[RHS_CALLS] += cc.shape[0] - 1
             err = error_norm(u, y, k, atol, rtol, ynew)
             if not math.isfinite(err):
                 err = 1e10
-            fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err ** 0.25 / SAFETY))
+            fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err**0.25 / SAFETY))
             if err <= 1.0:
                 if counters[STEPS] > 0:
                     gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
@@ -207,17 +315,60 @@ def advance_to(u, clock, phase_index, counters, dense, t_end, sample, starts, ph
 
 
 @njit(**JIT_FLAGS)
-def integrate(u, clock, phase_index, counters, dense, targets, samples, starts, phases,
-              data, coefficients, context, drive_coefficients, mobility, bot_mobility,
-              membrane, atol, rtol, max_step, a, cc, hd, ws):
+def integrate(
+    u,
+    clock,
+    phase_index,
+    counters,
+    dense,
+    targets,
+    samples,
+    starts,
+    phases,
+    data,
+    coefficients,
+    context,
+    drive_coefficients,
+    mobility,
+    bot_mobility,
+    membrane,
+    atol,
+    rtol,
+    max_step,
+    a,
+    cc,
+    hd,
+    ws,
+):
     """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
     write the state there into the matching row of ``samples`` from the last step's
     continuous extension. Returns a status code."""
     for r in range(targets.size):
-        status = advance_to(u, clock, phase_index, counters, dense, targets[r],
-                            samples[r], starts, phases, data, coefficients, context,
-                            drive_coefficients, mobility, bot_mobility, membrane, atol,
-                            rtol, max_step, a, cc, hd, ws)
+        status = advance_to(
+            u,
+            clock,
+            phase_index,
+            counters,
+            dense,
+            targets[r],
+            samples[r],
+            starts,
+            phases,
+            data,
+            coefficients,
+            context,
+            drive_coefficients,
+            mobility,
+            bot_mobility,
+            membrane,
+            atol,
+            rtol,
+            max_step,
+            a,
+            cc,
+            hd,
+            ws,
+        )
         if status != OK:
             return status
     return OK

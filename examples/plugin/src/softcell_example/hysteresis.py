@@ -14,17 +14,23 @@ class Hysteresis(StopGoDetector):
     name = "hysteresis"
     description = "stop/go with two thresholds: go from go_above up, stop below stop_below"
     parameters = (
-        ParameterSpec("go_above", 0.05, "cm s-1", "speed from which a stop becomes go",
-                      minimum=0.0),
-        ParameterSpec("stop_below", 0.02, "cm s-1", "speed below which a go becomes stop",
-                      minimum=0.0),
+        ParameterSpec(
+            "go_above", 0.05, "cm s-1", "speed from which a stop becomes go", minimum=0.0
+        ),
+        ParameterSpec(
+            "stop_below", 0.02, "cm s-1", "speed below which a go becomes stop", minimum=0.0
+        ),
     )
 
     @classmethod
     def check(cls, params):
         if params["stop_below"] > params["go_above"]:
-            raise ParameterError("stop_below", params["stop_below"],
-                                 f"must be <= go_above = {params['go_above']:g}", "cm s-1")
+            raise ParameterError(
+                "stop_below",
+                params["stop_below"],
+                f"must be <= go_above = {params['go_above']:g}",
+                "cm s-1",
+            )
 
     def label(self, speed, interval):
         speed = np.asarray(speed, dtype=np.float64)

@@ -11,13 +11,20 @@ from numba import njit
 
 from softcell.plugin import EnergyTerm, ParameterSpec
 
-PRESSURE = ParameterSpec("pressure", 1e-4, "N cm-1", "2D pressure inside the membrane",
-                         minimum=0.0, minimum_inclusive=True)
+PRESSURE = ParameterSpec(
+    "pressure",
+    1e-4,
+    "N cm-1",
+    "2D pressure inside the membrane",
+    minimum=0.0,
+    minimum_inclusive=True,
+)
 
 
 @njit(nogil=True)
-def pressure_partials(x, y, xp, yp, xpp, ypp, pose, context, coefficients,
-                      p0x, p0y, p1x, p1y, p2x, p2y, dpose):
+def pressure_partials(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
     half = 0.5 * coefficients[0]
     for n in range(x.size):  # add, never overwrite: the engine sums every term's partials
         p0x[n] -= half * yp[n]

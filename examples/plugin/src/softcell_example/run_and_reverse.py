@@ -31,8 +31,9 @@ class RunAndReverse(DrivingProtocol):
     name = "run_and_reverse"
     description = "runs forward or backward at random (force +-F0), tumbles (torque +-T0)"
     # Parameters of the model catalogue are reused by listing their specs.
-    parameters = tuple(MODEL_PARAMETERS[n] for n in ("drive_force", "drive_torque",
-                                                     "phase_min", "phase_max"))
+    parameters = tuple(
+        MODEL_PARAMETERS[n] for n in ("drive_force", "drive_torque", "phase_min", "phase_max")
+    )
 
     def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
         lo, hi = float(self.params["phase_min"]), float(self.params["phase_max"])

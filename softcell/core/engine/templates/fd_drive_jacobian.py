@@ -9,8 +9,9 @@ from numba import njit
 
 
 @njit(**JIT_FLAGS)
-def drive_jacobian(phase, datum, pose, context, drive_coefficients, steps, pose_tmp,
-                   plus, minus, out):
+def drive_jacobian(
+    phase, datum, pose, context, drive_coefficients, steps, pose_tmp, plus, minus, out
+):
     for d in range(3):
         h = steps[6 + d]
         pose_tmp[:] = pose

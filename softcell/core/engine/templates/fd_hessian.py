@@ -14,8 +14,22 @@ from numba import njit
 
 
 @njit(**JIT_FLAGS)
-def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus,
-               pose_tmp, hww, hwp, hpp):
+def fd_hessian(
+    w,
+    pose,
+    context,
+    coefficients,
+    steps,
+    saved,
+    plus,
+    minus,
+    dplus,
+    dminus,
+    pose_tmp,
+    hww,
+    hwp,
+    hpp,
+):
     n = w.shape[1]
     for b in range(6):
         h = steps[b]
@@ -24,14 +38,46 @@ def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus,
             w[b, i] = saved[i] + h
         plus[:, :] = 0.0
         dplus[:] = 0.0
-        partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
-                 plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
+        partials(
+            w[0],
+            w[1],
+            w[2],
+            w[3],
+            w[4],
+            w[5],
+            pose,
+            context,
+            coefficients,
+            plus[0],
+            plus[1],
+            plus[2],
+            plus[3],
+            plus[4],
+            plus[5],
+            dplus,
+        )
         for i in range(n):
             w[b, i] = saved[i] - h
         minus[:, :] = 0.0
         dminus[:] = 0.0
-        partials(w[0], w[1], w[2], w[3], w[4], w[5], pose, context, coefficients,
-                 minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
+        partials(
+            w[0],
+            w[1],
+            w[2],
+            w[3],
+            w[4],
+            w[5],
+            pose,
+            context,
+            coefficients,
+            minus[0],
+            minus[1],
+            minus[2],
+            minus[3],
+            minus[4],
+            minus[5],
+            dminus,
+        )
         w[b] = saved
         inv = 0.5 / h
         for a in range(6):
@@ -43,13 +89,45 @@ def fd_hessian(w, pose, context, coefficients, steps, saved, plus, minus, dplus,
         pose_tmp[c] = pose[c] + h
         plus[:, :] = 0.0
         dplus[:] = 0.0
-        partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
-                 plus[0], plus[1], plus[2], plus[3], plus[4], plus[5], dplus)
+        partials(
+            w[0],
+            w[1],
+            w[2],
+            w[3],
+            w[4],
+            w[5],
+            pose_tmp,
+            context,
+            coefficients,
+            plus[0],
+            plus[1],
+            plus[2],
+            plus[3],
+            plus[4],
+            plus[5],
+            dplus,
+        )
         pose_tmp[c] = pose[c] - h
         minus[:, :] = 0.0
         dminus[:] = 0.0
-        partials(w[0], w[1], w[2], w[3], w[4], w[5], pose_tmp, context, coefficients,
-                 minus[0], minus[1], minus[2], minus[3], minus[4], minus[5], dminus)
+        partials(
+            w[0],
+            w[1],
+            w[2],
+            w[3],
+            w[4],
+            w[5],
+            pose_tmp,
+            context,
+            coefficients,
+            minus[0],
+            minus[1],
+            minus[2],
+            minus[3],
+            minus[4],
+            minus[5],
+            dminus,
+        )
         inv = 0.5 / h
         for a in range(6):
             for i in range(n):

@@ -61,6 +61,7 @@ def jacobian(jac, lw):
     :func:`velocity` left in ``lw``) become the velocity modes' rows."""
     lc = (lw.vhat.size - 1) // 2
     derivative(lw)
-    law_matrix(lw.dxx, lw.dxy, lw.dyx, lw.dyy, lw.scale[0], lc, lw.buf, lw.spec, lw.a_hat,
-               lw.b_hat, lw.law)
+    law_matrix(
+        lw.dxx, lw.dxy, lw.dyx, lw.dyy, lw.scale[0], lc, lw.buf, lw.spec, lw.a_hat, lw.b_hat, lw.law
+    )
     apply_to_rows(lw.law, jac, lw.rows)
