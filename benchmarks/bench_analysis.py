@@ -1,4 +1,4 @@
-"""Analysis benchmarks (issue 4).
+"""Analysis benchmarks.
 
 - MSD of one 10^6-sample 2-D trajectory by the FFT algorithm (target: under 1 s);
 - the full analysis of a 25-realization, 1800 s Dataset sampled like the paper (0.01 s to

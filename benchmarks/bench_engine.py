@@ -1,4 +1,4 @@
-"""Engine benchmarks (issue 3): microseconds per explicit Euler step at N = 1024.
+"""Engine benchmarks: microseconds per explicit Euler step at N = 1024.
 
 Each case builds a model, compiles the stepper with a short warm-up advance (not timed), then
 times one ``advance`` over ``span`` simulated seconds:
@@ -31,11 +31,14 @@ def explicit_step(
     step and simulated seconds per wall second."""
     from softcell.core.engine import build_integrator, build_model, initial_state
     from softcell.core.params import Parameters
+    from softcell.core.plugin.registry import default_registry
     from softcell.core.realization import realization_rng
 
     params = Parameters({"radius": radius, "duration": warmup + span})
-    model = build_model(params, ["bending", "tension", "contact"], protocol)
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(
+        params, ["bending", "tension", "contact"], protocol, registry=default_registry()
+    )
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     modes, pose, schedule = initial_state(model, realization_rng(seed, 0, 0))
     state = stepper.start(modes, pose, schedule)
     stepper.advance(state, schedule, warmup)

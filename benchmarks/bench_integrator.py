@@ -1,4 +1,4 @@
-"""The fast integrator against the explicit reference (issue 5).
+"""The fast integrator against the explicit reference.
 
 For R = 4, 8 and 12 cm, realization 0 of root seed 0 (the realization of
 ``tests/regression/integrator_reference.npz``):
@@ -33,12 +33,13 @@ REALIZATIONS, CORES = 25, 2
 def explicit_rate(radius: float) -> float:
     """Simulated seconds per wall second of explicit_euler over [0, EXPLICIT_SPAN] s."""
     from softcell.core.engine import build_integrator, build_model, initial_state
+    from softcell.core.plugin.registry import default_registry
     from softcell.core.realization import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
     params = parameters(radius, EXPLICIT_SPAN)
-    model = build_model(params, TERMS, PROTOCOL)
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(params, TERMS, PROTOCOL, registry=default_registry())
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
     state = stepper.start(modes, pose, schedule)
     stepper.advance(state, schedule, 1e-4)  # compile

@@ -58,7 +58,8 @@ def warm_cluster_rate(tmp: Path) -> float:
     """The ensemble's rate on ``CORES`` workers that have already imported softcell and loaded
     the compiled model: what a long ensemble tends to, its start-up spread thin."""
     from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import cluster_client, simulate
+    from softcell.workflows.cluster import cluster_client
+    from softcell.workflows.ensemble import simulate
 
     with cluster_client(CORES) as client:
         simulate(

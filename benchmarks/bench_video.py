@@ -1,4 +1,4 @@
-"""Video benchmarks (issue 6): frames tracked per second at 1024 x 1024 px.
+"""Video benchmarks: frames tracked per second at 1024 x 1024 px.
 
 A 300-frame lossless video of a simulated cell (R = 12 cm at 10 px/cm in a 1024 x 1024 frame:
 the paper's 1 m arena) is rendered once (not timed); then ``track`` reads and tracks it end to

@@ -43,24 +43,46 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"softcell {version}"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 
-# A public function whose docstring names no unit fails the build (with -W): physical inputs
-# and outputs carry their units (cm, s, rad, N, ...), dimensionless ones say "1" or
-# "dimensionless", and those with no quantity at all say "no units".
+# Units, read from the numpydoc sections: every documented input and output that is a
+# physical quantity (a float, a complex or an array) names its unit in its type or
+# description (cm, s, rad, N, ...; "1" or "dimensionless" for pure numbers). Integers are
+# counts and indices, and the other types (names, paths, Datasets that carry their units in
+# attributes) have no unit. A missing unit fails the build (with -W).
+SECTIONS = ("Parameters", "Other Parameters", "Returns", "Yields", "Attributes")
+QUANTITY = re.compile(r"\b(float|complex|ndarray|array|scalar)\b")
 UNIT = re.compile(
-    r"\((?:[^()]*\b(?:cm|s|rad|N|px|cm2|cm/s|frames/s|1|Hz|MiB|B)\b[^()]*)\)"
-    r"|\bunits?\b|\bdimensionless\b|\bcm\b|\bseconds?\b"
+    r"\b(cm|cm2|cm-1|cm-2|s|s-1|rad|N|px|Hz|B|MiB|bytes|1|dimensionless|units?)\b"
+    r"|cm/s|rad/s|cm s-1|N cm|per cent|%|fraction|ratio|probabilit|multiples? of"
 )
 
 
+def _units_missing(doc: str) -> list[str]:
+    """The entries of ``doc``'s numpydoc sections that are quantities without a unit."""
+    from numpydoc.docscrape import NumpyDocString
+
+    parsed = NumpyDocString(doc)
+    return [
+        f"{section} {entry.name or entry.type!r}"
+        for section in SECTIONS
+        for entry in parsed[section]
+        if QUANTITY.search(entry.type)
+        and not UNIT.search(" ".join([entry.type, *entry.desc]))
+    ]
+
+
 def _check_units(app, what, name, obj, options, lines):
-    if what not in ("function", "method") or name.split(".")[-1].startswith("_"):
+    if what not in ("function", "method", "class") or name.split(".")[-1].startswith("_"):
         return
-    if not UNIT.search("\n".join(lines)):
+    import inspect
+
+    missing = _units_missing(inspect.getdoc(obj) or "")
+    if missing:
         from sphinx.util import logging
 
         logging.getLogger(__name__).warning(
-            "the docstring of %s states no units (name them, or say 'no units')",
+            "the docstring of %s states no unit for %s",
             name,
+            ", ".join(missing),
             type="softcell",
             subtype="units",
         )

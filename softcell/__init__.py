@@ -10,9 +10,14 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from softcell._version import __version__
+from softcell.config import use_module_store
 from softcell.core.params import Parameters
 from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ConfigError, ParameterError, SchemaError, SoftcellError
+from softcell.io.model_cache import DiskStore
+
+# The composed models are kept in the disk cache (core, which writes no file, is handed it).
+use_module_store(DiskStore())
 
 if TYPE_CHECKING:
     from softcell.core.analysis import analyze

@@ -91,9 +91,9 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
     """The parameters beyond the model's that ``components`` (kind -> name or names; None for
     every registered component) declare, by name, each with the first component declaring it
     (``"integrator 'rodas4'"``)."""
-    from softcell.core.plugin.registry import get_registry
+    from softcell.core.plugin.registry import default_registry
 
-    registry = get_registry()
+    registry = default_registry()
     found: dict[str, tuple[ParameterSpec, str]] = {}
     for entry in registry:
         cls = entry.component
@@ -121,9 +121,9 @@ def _config(args: argparse.Namespace) -> RunConfig:
 
 
 def _cmd_plugins(args: argparse.Namespace) -> int:
-    from softcell.core.plugin.registry import KINDS, get_registry
+    from softcell.core.plugin.registry import KINDS, default_registry
 
-    registry = get_registry()
+    registry = default_registry()
     for kind in KINDS.values():
         entries = registry.entries(kind)
         print(f"{kind} ({len(entries)})")
@@ -147,10 +147,12 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 
 def _cmd_params(args: argparse.Namespace) -> int:
     from softcell.core.limits import check_run
+    from softcell.core.plugin.registry import default_registry
 
+    registry = default_registry()
     config = _config(args).updated(components=_component_flags(args))
-    config.check_components()
-    points = expand_sweep(config.parameters, config.extra_specs())
+    config.check_components(registry)
+    points = expand_sweep(config.parameters, list(registry.parameter_specs().values()))
     for _, params in points:
         check_run(params)
     _, first = points[0]
@@ -846,7 +848,7 @@ def _add_cache(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 
 
 def _cmd_cache(args: argparse.Namespace) -> int:
-    from softcell.core.engine import compiled
+    from softcell.io import model_cache as compiled
 
     root = compiled.cache_dir()
     if args.action == "clear":

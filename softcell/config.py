@@ -10,9 +10,9 @@ from __future__ import annotations
 #: reproducible to the last bit, and checkpoints must resume to the same bytes.
 JIT: dict[str, object] = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
-#: Options of the functions composed at run time from generated source (the sum of the energy
-#: terms, the integrators' loops): those of the kernels, but not cached on disk, as numba
-#: cannot cache a function without a source file.
+#: Options of the kernels that take a compiled function as an argument (the generic Rosenbrock
+#: stage, :mod:`softcell.kernels.rosenbrock`): those of the kernels, but not cached on their
+#: own; they are compiled into the generated modules that call them, which are.
 JIT_COMPOSED: dict[str, object] = {**JIT, "cache": False}
 
 #: Membrane points farther than this many contact lengths lambda from the bot feel no contact
@@ -45,3 +45,20 @@ def progress_bar_class():
         warnings.simplefilter("ignore", TqdmWarning)
         from tqdm.auto import tqdm
     return tqdm
+
+
+_module_stores: list[object] = []
+
+
+def use_module_store(store: object) -> None:
+    """Keep the composed models in ``store`` from now on: an object with
+    ``place(label, key, source, description) -> str`` that stores a generated module's source
+    and returns its path (see :class:`softcell.core.engine.compiled.ModuleStore`). Importing
+    softcell sets the disk cache of :mod:`softcell.io.model_cache`."""
+    _module_stores[:] = [store]
+
+
+def module_store() -> object | None:
+    """The store set by :func:`use_module_store`, or None (then composed models are compiled
+    in memory, in each process)."""
+    return _module_stores[0] if _module_stores else None

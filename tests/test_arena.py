@@ -9,7 +9,7 @@ from softcell.core.engine import build_integrator, build_model, fd_hessian, init
 from softcell.core.engine.compose import compose_bot
 from softcell.core.engine.reference import _curve
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng
 from softcell.errors import ParameterError
 from softcell.io.netcdf import read_dataset
@@ -22,14 +22,16 @@ TERMS = ["bending", "tension", "contact", "arena"]
 
 def _params(**values):
     return Parameters(
-        {"radius": 4.0, "duration": 1.0, **values}, get_registry().parameter_specs().values()
+        {"radius": 4.0, "duration": 1.0, **values}, default_registry().parameter_specs().values()
     )
 
 
 def _run(terms, duration, membrane=True, integrator="rodas4", seed=0, **values):
     params = _params(duration=duration, **values)
-    model = build_model(params, terms, "run_and_tumble", membrane=membrane)
-    stepper = build_integrator(integrator, params).build(model)
+    model = build_model(
+        params, terms, "run_and_tumble", membrane=membrane, registry=default_registry()
+    )
+    stepper = build_integrator(integrator, params, default_registry()).build(model)
     modes, pose, schedule = initial_state(model, realization_rng(seed, 0, 0))
     state = stepper.start(modes, pose, schedule)
     times = np.arange(1, int(duration / 0.05) + 1) * 0.05
@@ -44,7 +46,7 @@ def _half_widths(a, b, theta):
 
 def test_second_derivatives_match_differences():
     params = _params(arena_side=10.0)
-    model = build_model(params, TERMS, "run_and_tumble")
+    model = build_model(params, TERMS, "run_and_tumble", registry=default_registry())
     term = model.terms[3]
     n = model.nodes
     # a curve crossing the walls' reach: a circle of radius 4.99 centred at (0.01, -0.005)
@@ -108,8 +110,8 @@ def test_second_derivatives_match_differences():
 
 def test_rodas4_jacobian_with_the_arena_matches_differences():
     params = _params(arena_side=10.0)
-    model = build_model(params, TERMS, "run_and_tumble")
-    stepper = build_integrator("rodas4", params).build(model)
+    model = build_model(params, TERMS, "run_and_tumble", registry=default_registry())
+    stepper = build_integrator("rodas4", params, default_registry()).build(model)
     lc = model.cutoff
     modes = np.zeros(2 * lc + 1, dtype=np.complex128)
     modes[lc], modes[lc + 1] = 0.02 - 0.01j, 4.99  # reaching two walls
@@ -172,7 +174,7 @@ def test_walls_never_reached_change_nothing_to_the_byte():
 
 def test_an_arena_too_small_is_refused_with_the_bound():
     with pytest.raises(ParameterError, match=r"arena_side = 8.0 cm .* must be > 8.5 cm"):
-        build_model(_params(arena_side=8.0), TERMS, "run_and_tumble")
+        build_model(_params(arena_side=8.0), TERMS, "run_and_tumble", registry=default_registry())
 
 
 def test_the_command_line_simulates_a_free_bot_in_the_arena(tmp_path):

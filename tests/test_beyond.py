@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from softcell.core.runconfig import RunConfig
 from softcell.workflows.beyond import VARIANTS, Variant, beyond
 from softcell.workflows.reproduce import Design, VideoDesign
 
@@ -19,13 +20,27 @@ TINY = Design(
 )
 
 
-def test_the_variants_are_the_studys():
-    names = [v.name for v in VARIANTS]
-    assert names == ["viscous", "coulomb_3e-05", "coulomb_0.0001", "coulomb_0.0003", "arena"]
-    design = VARIANTS[2].design(TINY)
-    assert design.components["friction_law"] == "coulomb"
-    assert design.parameters == {"membrane_static_friction": 1e-4, "static_friction_width": 1e-5}
-    assert "arena" in VARIANTS[4].design(TINY).components["energy_terms"]
+def test_a_variant_changes_only_its_own_components_and_parameters():
+    """Every variant is the base design with its own components and parameters over the
+    defaults, and each names a component and parameters that exist (a misspelt one would be
+    ignored by the study, not refused)."""
+    from softcell.core.plugin.registry import default_registry
+    from softcell.core.runconfig import DEFAULT_COMPONENTS
+
+    registry = default_registry()
+    assert len({v.name for v in VARIANTS}) == len(VARIANTS)
+    for variant in VARIANTS:
+        design = variant.design(TINY)
+        assert (design.radii, design.duration, design.video) == (
+            TINY.radii,
+            TINY.duration,
+            TINY.video,
+        )
+        assert design.components == {**DEFAULT_COMPONENTS, **variant.components}
+        assert design.parameters == {**TINY.parameters, **variant.parameters}
+        config = RunConfig(parameters=design.parameters, components=design.components)
+        config.check_components(registry)
+        registry.parameters(design.parameters)  # every name declared, every value allowed
 
 
 @pytest.mark.slow

@@ -82,7 +82,7 @@ def test_an_opencv_calibration_file_replaces_the_estimated_lens(simulated, tmp_p
     storage.write("camera_matrix", scene.camera_matrix())
     storage.write("distortion_coefficients", np.array([[scene.k1, 0.0, 0.0, 0.0, 0.0]]))
     storage.release()
-    from softcell.core.camera import read_calibration
+    from softcell.io.video import read_calibration
 
     camera = calibrate_from_plate(
         still(scene, simulated, tmp_path), PLATE, calibration=read_calibration(path)

@@ -12,10 +12,14 @@ from softcell.cli import main
 PY = [sys.executable, "-m", "softcell"]
 
 
-def test_plugins_lists_the_four_kinds(capsys):
+def test_plugins_lists_every_kind(capsys):
+    from softcell.core.plugin.registry import KINDS
+
     assert main(["plugins"]) == 0
     out = capsys.readouterr().out
-    for kind in ("energy_term", "driving_protocol", "integrator", "stopgo_detector"):
+    kinds = ("energy_term", "driving_protocol", "friction_law", "integrator", "stopgo_detector")
+    assert sorted(KINDS.values()) == sorted(kinds)
+    for kind in kinds:
         assert f"{kind} (" in out
     assert "threshold = 0.03 cm s-1" in out
 

@@ -18,6 +18,7 @@ from numba import njit
 
 from softcell.core.engine import compiled
 from softcell.errors import CacheWarning
+from softcell.io import model_cache
 
 SOURCE = textwrap.dedent("""
     from numba import njit
@@ -61,7 +62,7 @@ CHILD = textwrap.dedent("""
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
     root = tmp_path / "cache"
-    monkeypatch.setenv(compiled.CACHE_ENV, str(root))
+    monkeypatch.setenv(model_cache.CACHE_ENV, str(root))
     return root
 
 
@@ -73,7 +74,7 @@ def _plugin(folder: Path, factor: float) -> Path:
 
 
 def _child(cache: Path, plugin: Path, source: Path) -> subprocess.Popen:
-    env = {**os.environ, compiled.CACHE_ENV: str(cache)}
+    env = {**os.environ, model_cache.CACHE_ENV: str(cache)}
     return subprocess.Popen(
         [sys.executable, "-c", CHILD, str(plugin), str(source)],
         env=env,
@@ -103,7 +104,7 @@ def test_a_second_process_reads_the_compiled_function_and_a_changed_plugin_recom
     _plugin(tmp_path / "site", 3.0)  # the plugin's code changes: never its old entry
     third = _result(_child(cache, plugin, source))
     assert third == {"value": 3.0 * 6 + 4, "hits": 0, "misses": 1}
-    assert len(compiled.entries(cache)) == 2
+    assert len(model_cache.entries(cache)) == 2
 
 
 def test_processes_starting_at_once_share_one_entry(cache, tmp_path):
@@ -113,7 +114,7 @@ def test_processes_starting_at_once_share_one_entry(cache, tmp_path):
     children = [_child(cache, plugin, source) for _ in range(6)]
     results = [_result(c) for c in children]
     assert {r["value"] for r in results} == {16.0}
-    assert len(compiled.entries(cache)) == 1
+    assert len(model_cache.entries(cache)) == 1
     assert _result(_child(cache, plugin, source))["hits"] == 1
 
 
@@ -134,9 +135,9 @@ def _forget():
 def test_a_corrupt_entry_is_rebuilt_with_a_warning(cache, damage):
     module = _compile()
     assert module.total(np.arange(4.0)) == 16.0
-    (folder,) = [e.path for e in compiled.entries(cache)]
+    (folder,) = [e.path for e in model_cache.entries(cache)]
     if damage == "source":
-        path = folder / compiled.SOURCE
+        path = folder / model_cache.SOURCE
     else:
         (path,) = (folder / "__pycache__").glob("*.nbi" if damage == "index" else "*.nbc")
     path.write_bytes(path.read_bytes()[: len(path.read_bytes()) // 2])
@@ -160,7 +161,7 @@ def test_a_closure_is_compiled_in_memory_with_a_warning(cache):
     with pytest.warns(CacheWarning, match="closure"):
         module = compiled.compile_module("test", SOURCE, {"kernel": closure, "OFFSET": 0.0})
     assert module.total(np.arange(4.0)) == 30.0
-    assert compiled.entries(cache) == []
+    assert model_cache.entries(cache) == []
 
 
 def test_bindings_other_than_compiled_functions_and_scalars_are_refused(cache):
@@ -194,7 +195,7 @@ def test_the_cache_command_shows_and_clears(cache, capsys):
     assert "removed 0 stale entries" in capsys.readouterr().out
     assert main(["cache", "clear"]) == 0
     assert "removed 1 entries" in capsys.readouterr().out
-    assert compiled.entries(cache) == []
+    assert model_cache.entries(cache) == []
 
 
 def test_the_plugin_guide_example_composes_and_runs(cache):
@@ -215,19 +216,21 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
     loop(*args, out)
     run_and_tumble_drive(*args, expected)
     assert np.array_equal(out, expected) and np.any(out != 0.0)
-    assert [e.label for e in compiled.entries(cache)] == ["my-loop"]
+    assert [e.label for e in model_cache.entries(cache)] == ["my-loop"]
 
 
 MODEL_CHILD = textwrap.dedent("""
     import json
     import numpy as np
     from softcell.core.engine import build_integrator, build_model, initial_state
+    from softcell.core.plugin.registry import default_registry
     from softcell.core.realization import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
     params = parameters(6.0, 0.2)
-    model = build_model(params, TERMS, PROTOCOL)
-    stepper = build_integrator("rodas4", params).build(model)
+    registry = default_registry()
+    model = build_model(params, TERMS, PROTOCOL, registry=registry)
+    stepper = build_integrator("rodas4", params, registry).build(model)
     modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
     state = stepper.start(modes, pose, schedule)
     stepper.sample(state, schedule, np.array([0.2]))
@@ -242,7 +245,7 @@ MODEL_CHILD = textwrap.dedent("""
 def test_the_built_in_model_is_compiled_once_per_machine(cache):
     """A new process reads rodas4's loop from the cache the first one wrote, and gets the
     same numbers."""
-    env = {**os.environ, compiled.CACHE_ENV: str(cache)}
+    env = {**os.environ, model_cache.CACHE_ENV: str(cache)}
     runs = []
     for _ in range(2):
         done = subprocess.run(
@@ -257,14 +260,14 @@ def test_the_built_in_model_is_compiled_once_per_machine(cache):
     assert (runs[0]["hits"], runs[0]["misses"]) == (0, 1)
     assert (runs[1]["hits"], runs[1]["misses"]) == (1, 0)
     assert runs[0]["pose"] == runs[1]["pose"]
-    labels = {e.label for e in compiled.entries(cache)}
+    labels = {e.label for e in model_cache.entries(cache)}
     assert {"rodas4-loop", "rodas4-grid", "partials", "hessians", "fd-drive"} <= labels
 
 
 def test_an_unwritable_cache_compiles_in_memory_with_a_warning(tmp_path, monkeypatch):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    monkeypatch.setenv(compiled.CACHE_ENV, str(blocker / "cache"))
+    monkeypatch.setenv(model_cache.CACHE_ENV, str(blocker / "cache"))
     with pytest.warns(CacheWarning, match="cannot write"):
         module = compiled.compile_module("test", SOURCE, {"kernel": _double, "OFFSET": 1.0})
     assert module.total(np.arange(4.0)) == 16.0

@@ -92,9 +92,9 @@ PLUGIN = types.SimpleNamespace(
     ],
 )
 def test_a_kernel_that_breaks_its_contract_stops_the_build(terms, protocol, message):
-    with registered(PLUGIN):
+    with registered(PLUGIN) as registry:
         with pytest.raises(ContractError, match=message) as info:
-            build_model(Parameters({"radius": 4.0}), terms, protocol)
+            build_model(Parameters({"radius": 4.0}), terms, protocol, registry=registry)
     assert "\n" not in str(info.value)
 
 
@@ -128,16 +128,17 @@ ENGINE_TYPES = """
 import json
 from softcell.core.engine import build_integrator, build_model
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 
 counts = {}
 for integrator, protocol, extra in (("rodas4", "run_and_tumble", {}),
                                     ("explicit_euler", "pivot_run_and_tumble", {"dt": 1e-6})):
-    params = Parameters({"radius": 4.0, "duration": 0.01, "cutoff": 4, "nodes": 64,
-                         "stored_nodes": 16, **extra}, get_registry().parameter_specs().values())
-    model = build_model(params, ["bending", "tension", "contact"], protocol)
-    run_realization(model, build_integrator(integrator, params).build(model),
+    params = default_registry().parameters({"radius": 4.0, "duration": 0.01, "cutoff": 4,
+                                            "nodes": 64, "stored_nodes": 16, **extra})
+    model = build_model(params, ["bending", "tension", "contact"], protocol,
+                        registry=default_registry())
+    run_realization(model, build_integrator(integrator, params, default_registry()).build(model),
                     realization_rng(0, 0, 0))
     for component in (*model.terms, model.protocol):
         for method in type(component).kernels:

@@ -342,9 +342,9 @@ def test_a_file_of_another_spawn_key_is_not_reused(sweep, capsys):
 
 
 def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
-    import softcell.workflows.ensemble as ensemble
+    import softcell.workflows.tasks as tasks
 
-    monkeypatch.setattr(ensemble, "__version__", "99.0")
+    monkeypatch.setattr(tasks, "__version__", "99.0")
     assert _simulate(sweep) == 2
     assert f"softcell version = {softcell.__version__} there, 99.0 in this request" in (
         capsys.readouterr().err
@@ -361,13 +361,13 @@ def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, 
 
 
 def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path, capsys):
-    from softcell.workflows.ensemble import _save_checkpoint, checkpoint_path
+    from softcell.workflows.tasks import checkpoint_path, save_checkpoint
 
     out = tmp_path / "sim"
     out.mkdir()
     checkpoint = checkpoint_path(out / "point000_realization0000.nc")
     request = json.dumps({"parameter radius": 9.0})
-    _save_checkpoint(
+    save_checkpoint(
         checkpoint,
         request,
         1,
@@ -684,10 +684,11 @@ requests = st.fixed_dictionaries(
     }
 )
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
-    from softcell.core.plugin.registry import get_registry
+    from softcell.core.plugin.registry import default_registry
     from softcell.core.runconfig import RunConfig
     from softcell.errors import SoftcellError
-    from softcell.workflows.ensemble import plan, resume_plan, stored_request
+    from softcell.workflows.ensemble import plan
+    from softcell.workflows.resume import resume_plan, stored_request
 
     out = world / "sim"  # made with FIRST, seed 0, 1 realization, the membrane
     values = {**FIRST, "radius": second["radius"], "duration": second["duration"]}
@@ -702,8 +703,8 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
         realizations=second["realizations"],
         seed=second["seed"],
         membrane=second["membrane"],
+        registry=default_registry(),
     )
-    specs = list(get_registry().parameter_specs().values())
     try:
         resume = resume_plan(tasks, out)
     except SoftcellError as exc:
@@ -713,7 +714,7 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
     todo = {t.path for t in resume.todo}
     for task in tasks:
         if task.path not in todo:  # reused: made with exactly this request
-            assert stored_request(Path(task.path))[0] == task.request(specs)
+            assert stored_request(Path(task.path))[0] == task.request()
     assert resume.reused == len(tasks) - len(todo)
     # Independently: the first run made realization 0 of radius 4 (point 0) and 5 (point 1);
     # a task may reuse its file only if every other setting is the first run's too.

@@ -24,6 +24,7 @@ from softcell.core.engine import (
 )
 from softcell.core.params import Parameters, ParameterSpec
 from softcell.core.plugin.contracts import EnergyTerm
+from softcell.core.plugin.registry import default_registry
 from softcell.core.runconfig import RunConfig
 from softcell.errors import ParameterError
 from softcell.testing import registered
@@ -74,10 +75,11 @@ def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
 def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
     """Every task goes to dask with its simulated seconds as priority, so a long realization
     never runs alone at the end (the full design puts its 1800 s radii last)."""
-    from softcell.workflows.ensemble import plan, run_on_cluster
+    from softcell.workflows.cluster import run_on_cluster
+    from softcell.workflows.ensemble import plan
 
     config = RunConfig(parameters={"radius": [4.0, 12.0], "duration": [2.0, 30.5]})
-    tasks = plan(config, tmp_path, realizations=1, seed=0)
+    tasks = plan(config, tmp_path, realizations=1, seed=0, registry=default_registry())
 
     class Refusing:
         """A client that records what it is given and then fails the wait."""
@@ -85,7 +87,7 @@ def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
         submitted: list = []
 
         def submit(self, fn, task, *args, priority=0, **kwargs):
-            self.submitted.append((task.values["duration"], priority))
+            self.submitted.append((task.params.duration, priority))
             return object()
 
         def cancel(self, futures):
@@ -103,7 +105,7 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]
 
     import softcell.core.realization as realization
-    import softcell.workflows.ensemble as ensemble
+    import softcell.workflows.tasks as ensemble
 
     calls = {"n": 0}
     original = ensemble.run_realization
@@ -146,8 +148,10 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     assert "dt" in str(info.value)  # the stability check refuses it up front
     # Past the stability check, a blow-up is caught while running.
     params = Parameters({"radius": 4.0, "duration": 0.02, **COARSE})
-    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", registry=default_registry()
+    )
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     model.membrane_mobility *= 1e4
     from softcell.core.realization import realization_rng, run_realization
 
@@ -177,9 +181,11 @@ def test_blow_up_check_speeds_equal_the_direct_fourier_sum(cutoff, points):
 
 def test_unstable_dt_is_refused_with_the_bound():
     params = Parameters({"radius": 4.0, "cutoff": 20, "dt": 1e-6})
-    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", registry=default_registry()
+    )
     with pytest.raises(ParameterError, match=r"dt = 1e-06 s .* must be < 2 / lambda_max"):
-        build_integrator("explicit_euler", params).build(model)
+        build_integrator("explicit_euler", params, default_registry()).build(model)
 
 
 ANCHOR = ParameterSpec(
@@ -213,7 +219,9 @@ def test_third_party_energy_term_works_like_a_builtin(tmp_path):
     plugin = types.SimpleNamespace(softcell_energy_terms=softcell.hookimpl(lambda: [Anchor]))
     with registered(plugin):
         params = Parameters({"radius": 5.0}, [ANCHOR])
-        model = build_model(params, ["bending", "tension", "anchor"], "run_and_tumble")
+        model = build_model(
+            params, ["bending", "tension", "anchor"], "run_and_tumble", registry=default_registry()
+        )
         modes = circle_modes(5.0, model.cutoff)
         modes[model.cutoff] = 0.3 + 0.1j
         fhat, _ = force_modes(model, modes, np.zeros(3))

@@ -13,7 +13,7 @@ import xarray as xr
 
 from softcell.core.engine import build_model, circle_modes, force_modes
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.testing import registered
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
@@ -135,9 +135,9 @@ def test_pressure_pushes_a_circle_out_with_force_p_r(example):
     radius, pressure = 6.0, 3e-4
     with example():
         params = Parameters(
-            {"radius": radius, "pressure": pressure}, get_registry().parameter_specs().values()
+            {"radius": radius, "pressure": pressure}, default_registry().parameter_specs().values()
         )
-        model = build_model(params, ["pressure"], "run_and_reverse")
+        model = build_model(params, ["pressure"], "run_and_reverse", registry=default_registry())
     modes = circle_modes(radius, model.cutoff, 0.4 - 0.2j)
     fhat, dpose = force_modes(model, modes, np.zeros(3))
     expected = np.zeros_like(fhat)
@@ -197,10 +197,12 @@ def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path)
             )
         params = Parameters(
             {"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16},
-            get_registry().parameter_specs().values(),
+            default_registry().parameter_specs().values(),
         )
-        model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
-        auto = get_registry().get("integrator", "explicit_auto")(params)
+        model = build_model(
+            params, ["bending", "tension", "contact"], "run_and_tumble", registry=default_registry()
+        )
+        auto = default_registry().get("integrator", "explicit_auto")(params)
         from softcell.core.engine import explicit_decay_rate
 
         dt = auto.step(model)
@@ -214,7 +216,7 @@ def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path)
 
 def test_hysteresis_holds_its_label_between_the_thresholds(example):
     with example():
-        cls = get_registry().get("stopgo_detector", "hysteresis")
+        cls = default_registry().get("stopgo_detector", "hysteresis")
         detector = cls(Parameters({"go_above": 0.05, "stop_below": 0.02}, cls.parameters))
         with pytest.raises(Exception, match="stop_below"):
             cls(Parameters({"go_above": 0.01, "stop_below": 0.02}, cls.parameters))

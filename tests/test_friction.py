@@ -16,7 +16,7 @@ from numba import njit
 
 from softcell.core.engine import build_integrator, build_model, circle_modes, total_energy
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.plugin import (
     MODEL_PARAMETERS,
     EnergyTerm,
@@ -90,7 +90,7 @@ class CoulombByDifferences(FrictionLaw):
 
     name = "coulomb_differences"
     description = "coulomb, derivative by central differences"
-    parameters = get_registry().get("friction_law", "coulomb").parameters
+    parameters = default_registry().get("friction_law", "coulomb").parameters
 
     def velocity_kernel(self):
         return coulomb_velocity
@@ -126,8 +126,10 @@ def _params(registry, **values):
 
 def _run(registry, terms, law, integrator, times, modes=None, **values):
     params = _params(registry, **values)
-    model = build_model(params, terms, "run_and_tumble", friction_law=law)
-    stepper = build_integrator(integrator, params).build(model)
+    model = build_model(
+        params, terms, "run_and_tumble", friction_law=law, registry=default_registry()
+    )
+    stepper = build_integrator(integrator, params, default_registry()).build(model)
     if modes is None:
         modes = circle_modes(4.0, model.cutoff)
     state = stepper.start(modes, np.array([0.0, 0.0, 0.0]), _schedule(times[-1]))
@@ -245,16 +247,20 @@ def test_the_sharp_limit_of_the_push_speed(plugin):
     "integrator, times", [("rodas4", [0.5, 1.0]), ("explicit_euler", [0.002, 0.004])]
 )
 def test_zero_threshold_is_the_viscous_law_to_rounding(integrator, times):
-    registry = get_registry()
+    registry = default_registry()
     runs = []
     for law, extra in (("viscous", {}), ("coulomb", {"membrane_static_friction": 0.0})):
         params = Parameters(
             {"radius": 4.0, "duration": 1.0, **extra}, registry.parameter_specs().values()
         )
         model = build_model(
-            params, ["bending", "tension", "contact"], "run_and_tumble", friction_law=law
+            params,
+            ["bending", "tension", "contact"],
+            "run_and_tumble",
+            friction_law=law,
+            registry=default_registry(),
         )
-        stepper = build_integrator(integrator, params).build(model)
+        stepper = build_integrator(integrator, params, default_registry()).build(model)
         schedule = Schedule(
             np.array([0.0, 0.3]), np.array([1, 0], dtype=np.int8), np.array([1.0, 1.0])
         )
@@ -281,7 +287,9 @@ def _largest_restoring_force(registry, modes):
     from softcell.core.engine import force_modes
     from softcell.core.engine.reference import _curve
 
-    model = build_model(_params(registry), ["bending", "tension"], "run_and_tumble")
+    model = build_model(
+        _params(registry), ["bending", "tension"], "run_and_tumble", registry=default_registry()
+    )
     fhat, _ = force_modes(model, modes, np.zeros(3))
     field = _curve(fhat, model.nodes)[0] * model.force_scale
     return float(np.abs(field).max())
@@ -318,9 +326,13 @@ def test_a_released_ellipse_relaxes_with_viscous_friction_and_stays_with_coulomb
 def test_rodas4_jacobian_with_static_friction_matches_differences(plugin, law):
     params = _params(plugin, membrane_static_friction=1e-4, static_friction_width=3e-5)
     model = build_model(
-        params, ["bending", "tension", "contact"], "run_and_tumble", friction_law=law
+        params,
+        ["bending", "tension", "contact"],
+        "run_and_tumble",
+        friction_law=law,
+        registry=default_registry(),
     )
-    stepper = build_integrator("rodas4", params).build(model)
+    stepper = build_integrator("rodas4", params, default_registry()).build(model)
     rng = np.random.default_rng(3)
     modes = _ellipse(model.cutoff, delta=0.05)
     lc = model.cutoff

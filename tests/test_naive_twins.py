@@ -12,6 +12,7 @@ from hypothesis.extra.numpy import arrays
 from softcell.core.analysis.msd import msd
 from softcell.core.engine import build_model, circle_modes, force_modes, total_energy
 from softcell.core.params import Parameters
+from softcell.core.plugin.registry import default_registry
 from softcell.kernels.ellipse import signed_distance_local
 from softcell.kernels.linalg import lu_factor, lu_solve
 from softcell.kernels.runs import phases
@@ -21,7 +22,9 @@ COARSE = {"cutoff": 4, "nodes": 64}
 
 def perturbed_membrane(radius, seed, pose=(0.0, 0.0, 0.0)):
     params = Parameters({"radius": radius, **COARSE})
-    model = build_model(params, ["bending", "tension", "contact"], "run_and_tumble")
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", registry=default_registry()
+    )
     rng = np.random.default_rng(seed)
     modes = circle_modes(radius + 0.02, model.cutoff)
     modes += 0.03 * (rng.normal(size=modes.size) + 1j * rng.normal(size=modes.size))

@@ -8,7 +8,7 @@ import pytest
 
 import softcell
 from softcell.core.plugin.contracts import StopGoDetector
-from softcell.core.plugin.registry import KINDS, PluginWarning, Registry, get_registry
+from softcell.core.plugin.registry import KINDS, PluginWarning, Registry, default_registry
 from softcell.errors import ConfigError, RegistryError
 from softcell.testing import registered
 
@@ -114,8 +114,8 @@ def test_plugin_registered_for_one_test():
 
     plugin = types.SimpleNamespace(softcell_stopgo_detectors=softcell.hookimpl(lambda: [Always]))
     with registered(plugin):
-        assert get_registry().get("stopgo_detector", "always_go") is Always
-    assert "always_go" not in get_registry().names("stopgo_detector")
+        assert default_registry().get("stopgo_detector", "always_go") is Always
+    assert "always_go" not in default_registry().names("stopgo_detector")
 
 
 def test_hook_docs_mention_units():
@@ -126,14 +126,16 @@ def test_hook_docs_mention_units():
         assert "Returns" in doc and "Called once" in doc
 
 
-def test_parameters_know_an_installed_components_parameters():
+def test_the_registry_knows_its_components_parameters_and_parameters_look_nothing_up():
     from fakeplugins import good
 
     from softcell.core.params import Parameters
 
     with pytest.raises(ConfigError, match="unknown parameter 'fake_level'"):
-        Parameters({"fake_level": 2.0})
-    with registered(good):
-        assert Parameters({"fake_level": 2.0}).fake_level == 2.0
+        default_registry().parameters({"fake_level": 2.0})
+    with registered(good) as registry:
+        assert registry.parameters({"fake_level": 2.0}).fake_level == 2.0
         with pytest.raises(ConfigError, match=r"'fake_levl' \(did you mean 'fake_level'\?\)"):
-            Parameters({"fake_levl": 2.0})
+            registry.parameters({"fake_levl": 2.0})
+        with pytest.raises(ConfigError, match="unknown parameter 'fake_level'"):
+            Parameters({"fake_level": 2.0})  # a value object: it never reaches for a registry

@@ -1,4 +1,4 @@
-"""The fast integrator (issue 5): its Jacobian, its plugin contract, its reproducibility, and
+"""The fast integrator: its Jacobian, its plugin contract, its reproducibility, and
 its accuracy against the stored explicit reference (tests/regression)."""
 
 from pathlib import Path
@@ -17,7 +17,7 @@ from softcell.core.engine import (
 )
 from softcell.core.params import MODEL_PARAMETERS, Parameters
 from softcell.core.plugin.contracts import EnergyTerm
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
@@ -31,7 +31,7 @@ REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"
 def _state(radius, contact, seed=1):
     """A deformed membrane with the bot's tip 0.005 cm inside it (contact) or at rest."""
     params = Parameters(
-        {"radius": radius, "duration": 1.0}, get_registry().parameter_specs().values()
+        {"radius": radius, "duration": 1.0}, default_registry().parameter_specs().values()
     )
     rng = np.random.default_rng(seed)
     lc = int(params.cutoff)
@@ -46,8 +46,8 @@ def _state(radius, contact, seed=1):
 
 
 def _stepper(params, terms=TERMS):
-    model = build_model(params, terms, "run_and_tumble")
-    return model, build_integrator("rodas4", params).build(model)
+    model = build_model(params, terms, "run_and_tumble", registry=default_registry())
+    return model, build_integrator("rodas4", params, default_registry()).build(model)
 
 
 def _rhs(model, stepper, u, phase=1):
@@ -57,7 +57,7 @@ def _rhs(model, stepper, u, phase=1):
 @pytest.mark.parametrize("name", TERMS)
 def test_analytic_second_derivatives_match_the_fallback(name):
     params, modes, pose = _state(4.0, contact=True)
-    model = build_model(params, TERMS, "run_and_tumble")
+    model = build_model(params, TERMS, "run_and_tumble", registry=default_registry())
     term = model.terms[TERMS.index(name)]
     n = model.nodes
     from softcell.core.engine.reference import _curve
@@ -150,7 +150,9 @@ def test_a_term_without_second_derivatives_uses_the_documented_fallback():
 
 
 def test_same_bytes_whatever_the_split_of_the_samples():
-    params = Parameters({"radius": 4.0, "duration": 0.3}, get_registry().parameter_specs().values())
+    params = Parameters(
+        {"radius": 4.0, "duration": 0.3}, default_registry().parameter_specs().values()
+    )
     model, stepper = _stepper(params)
     modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
     times = np.arange(1, 31) * 0.01
@@ -167,10 +169,10 @@ def test_bad_smooth_grid_is_refused():
     from softcell.errors import ParameterError
 
     params = Parameters(
-        {"radius": 4.0, "smooth_nodes": 32}, get_registry().parameter_specs().values()
+        {"radius": 4.0, "smooth_nodes": 32}, default_registry().parameter_specs().values()
     )
     with pytest.raises(ParameterError, match="smooth_nodes = 32 .* must be >= 4 cutoff = 64"):
-        build_integrator("rodas4", params)
+        build_integrator("rodas4", params, default_registry())
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The statistical round trip (issue 6): 100 s of a decoupled cell, rendered and tracked.
+"""The statistical round trip: 100 s of a decoupled cell, rendered and tracked.
 
 Both the truth (resampled at the frame times) and the tracked record are analysed identically:
 decimated to 0.1 s (velocities differenced over 0.1 s) with the experiments' 0.3 cm/s

@@ -18,14 +18,13 @@ three:
 
 Plate coordinates: the origin is the plate corner seen at the image's lower left, x runs along
 the edge towards the lower-right corner, y towards the upper-left corner, z up; all in cm.
-A camera matrix and distortion from ``cv2.calibrateCamera`` (:func:`read_calibration`) replace
-the estimated distortion and focal length.
+A camera matrix and distortion from ``cv2.calibrateCamera`` (read from its file by
+:func:`softcell.io.video.read_calibration`) replace the estimated distortion and focal length.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -450,27 +449,3 @@ def _camera_position(
     ):
         return None  # the two disagree by more than 1.5x in f: looking (almost) straight down
     return _pose(h, center, np.sqrt(w))
-
-
-def read_calibration(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Camera matrix [3, 3] (px) and distortion coefficients from an OpenCV YAML/XML file
-    with nodes ``camera_matrix`` and ``distortion_coefficients`` (what ``cv2.FileStorage``
-    writes after ``cv2.calibrateCamera``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise CalibrationError(f"no such calibration file: {path}")
-    storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    try:
-        if not storage.isOpened():
-            raise CalibrationError(f"cannot read calibration file {path} (not OpenCV YAML/XML)")
-        matrix = storage.getNode("camera_matrix").mat()
-        dist = storage.getNode("distortion_coefficients").mat()
-    finally:
-        storage.release()
-    if matrix is None or matrix.shape != (3, 3) or not np.isfinite(matrix).all():
-        raise CalibrationError(f"calibration file {path} has no 3 x 3 camera_matrix")
-    if dist is None or dist.size not in (4, 5, 8, 12, 14):
-        raise CalibrationError(
-            f"calibration file {path} has no distortion_coefficients (4, 5, 8, 12 or 14 numbers)"
-        )
-    return matrix.astype(np.float64), dist.astype(np.float64).ravel()

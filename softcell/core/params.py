@@ -287,15 +287,15 @@ class Parameters(Mapping[str, Value]):
     values : mapping, optional
         Values that differ from the defaults, by parameter name, in the declared units.
     extra_specs : iterable of ParameterSpec, optional
-        Parameters declared by components beyond ``MODEL_PARAMETERS``. A name in
-        ``values`` declared by neither is looked up among the parameters of the installed
-        components (the plugin registry, built on first use), so
-        ``Parameters({"pressure": 2e-4})`` works once the plugin declaring it is installed.
+        Parameters declared by components beyond ``MODEL_PARAMETERS``. A plain value object:
+        it never looks anything up, so a component's parameter (``{"pressure": 2e-4}``)
+        needs its declaration here; ``Registry.parameters(values)`` passes every
+        registered component's.
 
     Raises
     ------
     ConfigError
-        For a parameter name no model parameter or installed component declares.
+        For a parameter name neither ``MODEL_PARAMETERS`` nor ``extra_specs`` declares.
     ParameterError
         For a value outside its allowed range (the message names parameter, value, range, unit).
 
@@ -314,15 +314,8 @@ class Parameters(Mapping[str, Value]):
         specs = merge_specs(MODEL_PARAMETERS.values(), extra_specs)
         given = {k: v for k, v in (values or {}).items() if v is not None}
         unknown = [k for k in given if k not in specs]
-        if unknown:  # a parameter of an installed component? (the registry, only then)
-            from softcell.core.plugin.registry import get_registry
-
-            declared = get_registry().parameter_specs()
-            specs = merge_specs(specs.values(), [declared[k] for k in unknown if k in declared])
-            unknown = [k for k in unknown if k not in declared]
         if unknown:
-            known = [*specs, *declared]
-            raise ConfigError(f"unknown parameter {unknown[0]!r}{suggest(unknown[0], known)}")
+            raise ConfigError(f"unknown parameter {unknown[0]!r}{suggest(unknown[0], specs)}")
         resolved: dict[str, Value] = {}
         for name, spec in specs.items():
             if name in given:

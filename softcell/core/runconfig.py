@@ -25,10 +25,13 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from softcell.core.params import ParameterSpec, suggest
+from softcell.core.params import suggest
 from softcell.errors import ConfigError
+
+if TYPE_CHECKING:
+    from softcell.core.plugin.registry import Registry
 
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],
@@ -64,13 +67,9 @@ class RunConfig:
             run={**self.run, **dict(run)},
         )
 
-    def check_components(self) -> None:
-        """Raise :class:`ConfigError` unless every component named exists in the registry
-        (with a suggestion for a misspelt one) and no energy term is named twice (names
-        only: no units)."""
-        from softcell.core.plugin.registry import get_registry
-
-        registry = get_registry()
+    def check_components(self, registry: Registry) -> None:
+        """Raise :class:`ConfigError` unless every component named exists in ``registry``
+        (with a suggestion for a misspelt one) and no energy term is named twice."""
         terms = self.components.get("energy_terms", [])
         if isinstance(terms, str) or not isinstance(terms, list | tuple):
             raise ConfigError(f"energy_terms = {terms!r} is not allowed: must be a list of names")
@@ -86,12 +85,6 @@ class RunConfig:
             if not isinstance(name, str):
                 raise ConfigError(f"{kind} = {name!r} is not allowed: must be a name")
             registry.get(kind, name)
-
-    def extra_specs(self) -> list[ParameterSpec]:
-        """Parameters declared by registered components (e.g. the detector's ``threshold``)."""
-        from softcell.core.plugin.registry import get_registry
-
-        return list(get_registry().parameter_specs().values())
 
 
 def config_from_mapping(data: dict[str, Any], source: object = "configuration") -> RunConfig:

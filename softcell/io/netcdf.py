@@ -46,8 +46,8 @@ TEXT_ENCODING = "S1"
 
 
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: int = 4) -> Path:
-    """Write ``ds`` to ``path`` as compressed NetCDF-4, atomically (no units of its own:
-    each variable's CF ``units`` attribute is written as it is).
+    """Write ``ds`` to ``path`` as compressed NetCDF-4, atomically; each variable's CF
+    ``units`` attribute is written as it is.
 
     Parameters
     ----------
@@ -123,8 +123,8 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
 
 
 def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
-    """Read one NetCDF file fully into memory and close it (no units of its own: every
-    variable keeps the CF ``units`` attribute it was written with)."""
+    """Read one NetCDF file fully into memory and close it; every variable keeps the CF
+    ``units`` attribute it was written with."""
     path = Path(path)
     if not path.is_file():
         raise SoftcellError(f"no such file: {path}")

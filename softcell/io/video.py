@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 import xarray as xr
 
-from softcell.core.camera import calibrate_from_plate, read_calibration
+from softcell.core.camera import CalibrationError, calibrate_from_plate
 from softcell.core.tracking import (
     DARK_FRACTION,
     FLAGS,
@@ -456,3 +456,27 @@ def draw_overlay(
         cv2.LINE_AA,
     )
     return out
+
+
+def read_calibration(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Camera matrix [3, 3] (px) and distortion coefficients from an OpenCV YAML/XML file
+    with nodes ``camera_matrix`` and ``distortion_coefficients`` (what ``cv2.FileStorage``
+    writes after ``cv2.calibrateCamera``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationError(f"no such calibration file: {path}")
+    storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    try:
+        if not storage.isOpened():
+            raise CalibrationError(f"cannot read calibration file {path} (not OpenCV YAML/XML)")
+        matrix = storage.getNode("camera_matrix").mat()
+        dist = storage.getNode("distortion_coefficients").mat()
+    finally:
+        storage.release()
+    if matrix is None or matrix.shape != (3, 3) or not np.isfinite(matrix).all():
+        raise CalibrationError(f"calibration file {path} has no 3 x 3 camera_matrix")
+    if dist is None or dist.size not in (4, 5, 8, 12, 14):
+        raise CalibrationError(
+            f"calibration file {path} has no distortion_coefficients (4, 5, 8, 12 or 14 numbers)"
+        )
+    return matrix.astype(np.float64), dist.astype(np.float64).ravel()

@@ -40,8 +40,9 @@ class Tableau(NamedTuple):
         return self.c.shape[0]
 
 
-# The functions below take the right-hand side as an argument, so they are compiled once per
-# right-hand side and never cached on disk (JIT_COMPOSED).
+# ``stages`` takes the right-hand side as an argument, so it is compiled once per right-hand
+# side; these kernels are compiled into the generated loop that calls them (JIT_COMPOSED),
+# whose entry in the compiled-model cache keeps them.
 
 
 @njit(**JIT_COMPOSED)

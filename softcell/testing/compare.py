@@ -1,5 +1,5 @@
 """Integrators side by side: one realization from the same state and schedule, and the coarse
-statistics an integrator must reproduce (issue 5: validation of fast integrators against the
+statistics an integrator must reproduce (how a fast integrator is validated against the
 explicit reference).
 """
 
@@ -20,7 +20,7 @@ from softcell.core.engine import (
 )
 from softcell.core.engine.friction import mobility
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import run_realization
 from softcell.core.schema import PHASE_RUN as RUN
 from softcell.core.schema import PHASE_TUMBLE as TUMBLE
@@ -48,16 +48,15 @@ class Run:
 
 def parameters(radius: float, duration: float, **extra: object) -> Parameters:
     """The default model at this radius (cm) and duration (s), plus integrator settings."""
-    specs = get_registry().parameter_specs().values()
-    return Parameters({"radius": radius, "duration": duration, **extra}, specs)
+    return default_registry().parameters({"radius": radius, "duration": duration, **extra})
 
 
 def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
     """Run realization 0 of point 0 with root ``seed`` (the ensemble's stream) and time it."""
     from softcell.core.realization import realization_rng
 
-    model = build_model(params, TERMS, PROTOCOL)
-    stepper = build_integrator(integrator, params).build(model)
+    model = build_model(params, TERMS, PROTOCOL, registry=default_registry())
+    stepper = build_integrator(integrator, params, default_registry()).build(model)
     rng = realization_rng(seed, 0, 0)
     # Compile outside the timing: a throwaway run over two sample intervals.
     warm = parameters(
@@ -65,10 +64,10 @@ def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
         2 * float(params.sample_every),
         **{k: v for k, v in params.given.items() if k not in ("radius", "duration")},
     )
-    warm_model = build_model(warm, TERMS, PROTOCOL)
+    warm_model = build_model(warm, TERMS, PROTOCOL, registry=default_registry())
     run_realization(
         warm_model,
-        build_integrator(integrator, warm).build(warm_model),
+        build_integrator(integrator, warm, default_registry()).build(warm_model),
         realization_rng(seed, 0, 0),
     )
     begin = time.perf_counter()
@@ -85,7 +84,7 @@ def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
 
 def contact_force(model: Model, record: Record) -> np.ndarray:
     """|contact force on the bot| (N) at each sample, from the contact term alone."""
-    contact_only = build_model(model.params, ("contact",), PROTOCOL)
+    contact_only = build_model(model.params, ("contact",), PROTOCOL, registry=default_registry())
     weight = 2 * math.pi / model.nodes
     out = np.empty(record.times.size)
     for i in range(record.times.size):
@@ -103,7 +102,7 @@ def coarse_statistics(
     dt = np.diff(record.times)
     speed = np.abs(np.diff(cell)) / dt
     phase = schedule_phase[:-1]
-    model = build_model(params, TERMS, PROTOCOL)
+    model = build_model(params, TERMS, PROTOCOL, registry=default_registry())
     force = contact_force(model, record)
     return {
         "cell_speed_run": float(speed[phase == RUN].mean()),

@@ -225,8 +225,7 @@ def measure(folder: Path) -> dict[str, Any]:
     """The quantities the paper's static-friction and arena claims are about, from one
     variant's reproduction folder."""
     from softcell.core.freebot import renewal_diffusion
-    from softcell.core.params import Parameters
-    from softcell.core.plugin.registry import get_registry
+    from softcell.core.plugin.registry import default_registry
     from softcell.io.netcdf import read_dataset
 
     analysis = read_dataset(folder / "analysis.nc")
@@ -236,7 +235,7 @@ def measure(folder: Path) -> dict[str, Any]:
     free_msd = free["msd"].sel(body="bot")
     free_msd = free_msd.isel({d: 0 for d in free_msd.dims if d != "lag"})
     stored = read_dataset(next((folder / "free_bot").glob("*.nc"))).attrs["softcell_parameters"]
-    params = Parameters(json.loads(stored), get_registry().parameter_specs().values())
+    params = default_registry().parameters(json.loads(stored))
     confined = free["confined_diffusion_coefficient"].sel(body="bot")
     return {
         "radius": [float(r) for r in analysis["radius"].values],

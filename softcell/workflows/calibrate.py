@@ -96,7 +96,7 @@ class _Simulator:
 
     def __enter__(self) -> _Simulator:
         if self.workers > 1:
-            from softcell.workflows.ensemble import cluster_client
+            from softcell.workflows.cluster import cluster_client
 
             self.client = self.stack.enter_context(cluster_client(self.workers))
         return self

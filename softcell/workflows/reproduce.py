@@ -33,11 +33,14 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
 from softcell.errors import SoftcellError
 from softcell.workflows.pipeline import VideoDesign, experimental_pipeline
+
+if TYPE_CHECKING:
+    from softcell.core.plugin.registry import Registry
 
 RADII = tuple(float(r) for r in range(4, 14))
 
@@ -146,7 +149,7 @@ def _manifest(design: Design, seed: int) -> dict[str, Any]:
 def check_results_directory(out: Path, design: Design, seed: int, overwrite: bool) -> None:
     """Stop, in one line, unless ``out`` is new or empty, or holds a reproduction of the same
     design, seed and version (``overwrite`` lifts both)."""
-    from softcell.workflows.ensemble import first_mismatch
+    from softcell.workflows.resume import first_mismatch
 
     if overwrite or not out.is_dir() or not any(out.iterdir()):
         return
@@ -191,6 +194,7 @@ def reproduce(
     overwrite: bool = False,
     progress: bool = True,
     log: Callable[[str], None] | None = print,
+    registry: Registry | None = None,
 ) -> Outcome:
     """Run ``design`` into ``out``: simulations, analyses, the video pipeline, figures, report.
 
@@ -217,6 +221,9 @@ def reproduce(
         Progress bars.
     log : callable, optional
         Receives one line per step.
+    registry : Registry, optional
+        Where the components are looked up; by default the built-ins and the installed
+        plugins.
 
     Returns
     -------
@@ -225,18 +232,14 @@ def reproduce(
     """
     from softcell.core.analysis import analyze
     from softcell.core.limits import check_seed
+    from softcell.core.plugin.registry import default_registry
     from softcell.io.figures import make_figures
     from softcell.io.files import atomic_write, check_output, check_writable
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
-    from softcell.workflows.ensemble import (
-        check_scheduler,
-        cluster_client,
-        expected_bytes,
-        plan,
-        resume_plan,
-        simulate,
-    )
+    from softcell.workflows.cluster import check_scheduler, cluster_client
+    from softcell.workflows.ensemble import plan, simulate
     from softcell.workflows.report import write_report
+    from softcell.workflows.resume import expected_bytes, resume_plan
 
     if design.realizations < 1 or design.free_bot_realizations < 1:
         raise SoftcellError(
@@ -256,6 +259,7 @@ def reproduce(
             else os.cpu_count() or 1
         )
     check_seed(seed)
+    registry = registry if registry is not None else default_registry()
     out = check_output(out, "report", directory=True)
     check_results_directory(out, design, seed, overwrite)
     config = _config(design)
@@ -266,7 +270,14 @@ def reproduce(
         (config, "simulations", design.realizations, True),
         (free, "free_bot", design.free_bot_realizations, False),
     ):
-        tasks = plan(cfg, out / folder, realizations=count, seed=seed, membrane=membrane)
+        tasks = plan(
+            cfg,
+            out / folder,
+            realizations=count,
+            seed=seed,
+            membrane=membrane,
+            registry=registry,
+        )
         need += expected_bytes(resume_plan(tasks, out / folder, overwrite=overwrite).todo)
     check_writable(out, need)
     if scheduler is not None:
@@ -299,6 +310,7 @@ def reproduce(
                 progress=progress,
                 overwrite=overwrite,
                 log=say,
+                registry=registry,
             )
         with step("free_bot", "simulating the free bot"):
             simulate(
@@ -311,12 +323,18 @@ def reproduce(
                 progress=progress,
                 overwrite=overwrite,
                 log=say,
+                registry=registry,
             )
     with step("analysis", "analysing the sweep and the free bot"):
         # One dask chunk per file: the analysis holds one radius in memory at a time.
-        analysis = analyze(open_dataset(out / "simulations", chunks={}), options, progress=progress)
+        analysis = analyze(
+            open_dataset(out / "simulations", chunks={}),
+            options,
+            progress=progress,
+            registry=registry,
+        )
         write_dataset(analysis, out / "analysis.nc")
-        free_analysis = analyze(open_dataset(out / "free_bot"), options)
+        free_analysis = analyze(open_dataset(out / "free_bot"), options, registry=registry)
         write_dataset(free_analysis, out / "free_bot_analysis.nc")
     video = tracked = None
     if design.video is not None:
@@ -327,8 +345,14 @@ def reproduce(
         ):
             task = next(
                 t
-                for t in plan(_config(design), out / "simulations", realizations=1, seed=seed)
-                if t.values["radius"] == design.video.radius
+                for t in plan(
+                    _config(design),
+                    out / "simulations",
+                    realizations=1,
+                    seed=seed,
+                    registry=registry,
+                )
+                if t.params.radius == design.video.radius
             )
             video = experimental_pipeline(
                 Path(task.path),

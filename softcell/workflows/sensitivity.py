@@ -184,16 +184,15 @@ def membrane_measures(
     membrane's length (spectrally) and L_eq that of the force-free circle."""
     from softcell.core.analysis.series import smooth_area_perimeter
     from softcell.core.engine.state import equilibrium_radius
-    from softcell.core.params import Parameters
-    from softcell.core.plugin.registry import get_registry
+    from softcell.core.plugin.registry import default_registry
 
-    specs = get_registry().parameter_specs().values()
+    registry = default_registry()
     ipr, deviation = [], []
     for i, radius in enumerate(np.asarray(sims["radius"].values, dtype=float)):
         point = sims.isel(radius=i)  # [realization, time, node]
         area, length = smooth_area_perimeter(point["membrane_x"].values, point["membrane_y"].values)
         ipr.append((length / np.sqrt(np.abs(area)))[:, keep].mean(axis=-1))
-        r_eq = equilibrium_radius(Parameters({**params, "radius": float(radius)}, specs))
+        r_eq = equilibrium_radius(registry.parameters({**params, "radius": float(radius)}))
         deviation.append(float(np.nanmax(np.abs(length / (2 * np.pi * r_eq) - 1))))
     return np.asarray(ipr), np.asarray(deviation)
 

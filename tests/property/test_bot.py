@@ -15,6 +15,7 @@ from softcell.core.freebot import (
     turn_correlation,
 )
 from softcell.core.params import Parameters
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 from softcell.kernels.ellipse import signed_distance
 
@@ -66,8 +67,8 @@ def test_signed_distance_matches_brute_force(a, ratio, point, cx, cy, theta):
 
 def test_free_bot_runs_at_f0_over_gamma_t():
     params = Parameters({"duration": 1.0, "dt": 1e-5})
-    model = build_model(params, [], "run_and_tumble", membrane=False)
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(params, [], "run_and_tumble", membrane=False, registry=default_registry())
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     record = run_realization(model, stepper, realization_rng(0, 0, 0))
     speed = np.hypot(*np.diff(record.pose[:, :2], axis=0).T) / np.diff(record.times)
     running = (record.phase[:-1] == 1) & (record.phase[1:] == 1)
@@ -113,8 +114,10 @@ def test_renewal_formula_against_exact_kinematics(lo, spread, torque, offset, pi
 
 def test_pivot_drive_turns_the_free_bot_about_its_pivot():
     params = Parameters({"duration": 3.0, "dt": 1e-5, "pivot_side": "fixed"})
-    model = build_model(params, [], "pivot_run_and_tumble", membrane=False)
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(
+        params, [], "pivot_run_and_tumble", membrane=False, registry=default_registry()
+    )
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     record = run_realization(model, stepper, realization_rng(0, 0, 1))
     x, y, th = record.pose.T
     pivot_x = x - params.pivot_offset * np.sin(th)

@@ -7,6 +7,7 @@ import pytest
 import softcell
 from softcell.core.engine import build_integrator, build_model, membrane_length
 from softcell.core.params import Parameters
+from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 from softcell.core.runconfig import RunConfig
 from softcell.workflows.ensemble import simulate
@@ -16,8 +17,10 @@ pytestmark = pytest.mark.slow
 
 def run(radius, protocol, duration, seed=0):
     params = Parameters({"radius": radius, "duration": duration})
-    model = build_model(params, ["bending", "tension", "contact"], protocol)
-    stepper = build_integrator("explicit_euler", params).build(model)
+    model = build_model(
+        params, ["bending", "tension", "contact"], protocol, registry=default_registry()
+    )
+    stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     record = run_realization(model, stepper, realization_rng(seed, 0, 0))
     cell = record.modes[:, model.cutoff]
     bot = record.pose[:, 0] + 1j * record.pose[:, 1]

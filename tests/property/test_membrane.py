@@ -17,13 +17,19 @@ from softcell.core.engine import (
     total_energy,
 )
 from softcell.core.params import Parameters
+from softcell.core.plugin.registry import default_registry
 
 TERMS = ["bending", "tension", "contact"]
 radii = st.floats(3.5, 13.0)
 
 
 def model_for(radius, terms=TERMS, **values):
-    return build_model(Parameters({"radius": radius, **values}), terms, "run_and_tumble")
+    return build_model(
+        Parameters({"radius": radius, **values}),
+        terms,
+        "run_and_tumble",
+        registry=default_registry(),
+    )
 
 
 @settings(max_examples=20)

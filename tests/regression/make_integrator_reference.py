@@ -1,4 +1,4 @@
-"""Make the explicit reference the fast integrators are validated against (issue 5).
+"""Make the explicit reference the fast integrators are validated against.
 
 Usage (from the repository root, ~15 min on one core)::
 

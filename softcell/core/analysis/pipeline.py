@@ -29,7 +29,8 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
-from softcell.core.params import parameter_attrs
+from softcell.core.params import Parameters, parameter_attrs
+from softcell.core.plugin.registry import Registry, default_registry
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
 from softcell.errors import SoftcellError
 
@@ -67,11 +68,8 @@ def _radius(ds: xr.Dataset, point: Mapping[str, int]) -> float:
     return float(value) if isinstance(value, (int, float)) else np.nan
 
 
-def _detector(name: str, threshold: float | None):
-    from softcell.core.params import Parameters
-    from softcell.core.plugin.registry import get_registry
-
-    cls = get_registry().get("stopgo_detector", name)
+def _detector(registry: Registry, name: str, threshold: float | None):
+    cls = registry.get("stopgo_detector", name)
     values = {"threshold": threshold} if threshold is not None else {}
     if values and "threshold" not in {s.name for s in cls.parameters}:
         raise SoftcellError(f"stop/go detector {name!r} has no parameter 'threshold'")
@@ -191,7 +189,9 @@ SCALARS = (
 class _Setup:
     """What every point of one analysis shares: options, detectors, the kept times, lags."""
 
-    def __init__(self, ds: xr.Dataset, options: Mapping[str, Any] | None) -> None:
+    def __init__(
+        self, ds: xr.Dataset, options: Mapping[str, Any] | None, registry: Registry
+    ) -> None:
         opts = analysis_options(options)
         require(ds)
         self.opts = opts
@@ -199,11 +199,11 @@ class _Setup:
         threshold = opts["threshold"]
         if threshold is None and self.origin == "tracking" and opts["detector"] == "threshold":
             threshold = stopgo.EXPERIMENT_THRESHOLD
-        self.detector = _detector(opts["detector"], threshold)
+        self.detector = _detector(registry, opts["detector"], threshold)
         self.threshold = self.detector.params.get("threshold", threshold)
         self.shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
         self.shifted = [
-            _detector(opts["detector"], self.threshold + s)
+            _detector(registry, opts["detector"], self.threshold + s)
             if self.threshold is not None and self.threshold + s >= 0
             else None
             for s in self.shifts
@@ -488,7 +488,11 @@ def _collapse_variables(
 
 
 def analyze(
-    ds: xr.Dataset, options: Mapping[str, Any] | None = None, *, progress: bool = False
+    ds: xr.Dataset,
+    options: Mapping[str, Any] | None = None,
+    *,
+    progress: bool = False,
+    registry: Registry | None = None,
 ) -> xr.Dataset:
     """Analyse a simulation or tracked Dataset (docs/model.md §6).
 
@@ -501,6 +505,9 @@ def analyze(
         discard (s), fit windows (multiples of the mean go time), detector and threshold (cm/s), ...
     progress : bool
         Show a progress bar over sweep points.
+    registry : Registry, optional
+        Where the stop/go detector is looked up; by default the built-ins and the installed
+        plugins (:func:`~softcell.core.plugin.registry.default_registry`).
 
     Returns
     -------
@@ -518,7 +525,7 @@ def analyze(
 
     tqdm = progress_bar_class()
 
-    setup = _Setup(ds, options)
+    setup = _Setup(ds, options, registry if registry is not None else default_registry())
     res = _Results(setup, ds.sizes["realization"])
     radius = np.array([_radius(ds, p) for p in setup.points])
     for i, point in enumerate(

@@ -1,65 +1,42 @@
-"""The on-disk cache of composed models: generated modules that numba caches like any other.
+"""The compiled-model cache: composed models keyed by their code, so numba caches them.
 
-numba caches a compiled function by its source file, but the functions an integrator composes
-from the chosen components (the sum of the energy terms, the right-hand side, the time loop)
-used to be closures, which it cannot cache: every new process compiled them again. Here each
-composition is written out as a real module, one directory per *entry*::
-
-    <cache>/<label>-<key>/model.py        the generated source
-    <cache>/<label>-<key>/entry.json      what it is for (label, components, versions)
-    <cache>/<label>-<key>/__pycache__/    numba's own cache files of its functions
+numba caches a compiled function by its source file, so each composition of the chosen
+components (the sum of the energy terms, the right-hand side, the time loop) is generated as
+the source of a real module, stored by a :class:`ModuleStore` (the disk cache of
+:mod:`softcell.io.model_cache`, set when softcell is imported) and run from there.
 
 The functions it calls (the components' kernels, constants, other entries' functions) are
 *bound* into the module's namespace before it runs. numba does not look at those bindings
 when it replays a cached function, so the key covers them: the source, each bound kernel's
 code (every Python file of its package), its distribution's version, and the versions of
 softcell, numba, numpy and Python. A changed plugin gives a new key, hence a new entry; a
-stale entry is never read. Writers write to a temporary name and rename, so processes starting
-at once (dask workers) see either no file or a whole one; a corrupt entry (a truncated file,
-say) is removed and rebuilt with a :class:`~softcell.plugin.CacheWarning`.
-
-Location: ``$SOFTCELL_CACHE_DIR``, else the user cache directory (``platformdirs``), under
-``compiled/``.
+stale entry is never read.
 """
 
 from __future__ import annotations
 
 import ast
-import datetime
 import functools
 import hashlib
 import importlib
 import importlib.metadata
-import io
-import json
 import os
-import pickletools
 import platform
-import shutil
 import sys
-import tempfile
 import threading
 import types
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numba
 import numpy as np
 from numba.core.registry import CPUDispatcher
 
 from softcell._version import __version__
-from softcell.config import JIT
-from softcell.errors import CacheWarning
-
-#: Environment variable naming the cache's root directory.
-CACHE_ENV = "SOFTCELL_CACHE_DIR"
-
-#: Name of the generated source in each entry.
-SOURCE = "model.py"
-
-_HEADER = "# softcell compiled model; sha256 of the lines below: "
+from softcell.config import JIT, module_store
+from softcell.errors import CacheWarning, SoftcellError
 
 # numba flags of the generated functions: the kernels' own, cached on disk, or not cached
 # where an entry cannot be keyed (see :class:`NotCacheable`).
@@ -70,18 +47,8 @@ _UNCACHED = {**JIT, "cache": False}
 _PARENT = "softcell_compiled"
 
 _LOCK = threading.Lock()
-_LOADED: dict[str, types.ModuleType] = {}  # by entry folder
+_LOADED: dict[str, types.ModuleType] = {}  # by the location of their source
 _KEYS: dict[int, str] = {}  # id of a generated function -> key of its entry
-
-
-def cache_dir() -> Path:
-    """The root of the compiled-model cache (created on first use)."""
-    env = os.environ.get(CACHE_ENV)
-    if env:
-        return Path(env).expanduser()
-    import platformdirs
-
-    return platformdirs.user_cache_path("softcell") / "compiled"
 
 
 class NotCacheable(Exception):
@@ -220,105 +187,16 @@ def entry_key(source: str, bindings: Mapping[str, object]) -> str:
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 
-@dataclass(frozen=True)
-class Entry:
-    """One entry of the cache, as listed by ``softcell cache``."""
+class ModuleStore(Protocol):
+    """Where generated modules are kept between processes (:mod:`softcell.io.model_cache`)."""
 
-    path: Path
-    label: str
-    description: str
-    created: str
-    size: int  # bytes, numba's files included
-    stale: bool  # made by another softcell build or numba, numpy, Python version
+    def location(self, label: str, key: str) -> str:
+        """The path the source of ``key`` has, or will have, in the store."""
 
-    @property
-    def name(self) -> str:
-        return self.path.name
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _checked_source(path: Path) -> str | None:
-    """The body of a generated module whose header matches it, else None."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return None
-    first, _, body = text.partition("\n")
-    if first != _HEADER + hashlib.sha256(body.encode()).hexdigest():
-        return None
-    return body
-
-
-def _pickle_complete(data: bytes) -> None:
-    """Raise ValueError unless ``data`` is one or more whole pickles (read opcode by opcode,
-    so nothing is imported or built)."""
-    stream = io.BytesIO(data)
-    while stream.tell() < len(data):
-        for opcode, _, _ in pickletools.genops(stream):
-            if opcode.name == "STOP":
-                break
-        else:
-            raise ValueError("truncated pickle")
-
-
-def _numba_files_ok(folder: Path) -> str | None:
-    """None if every numba cache file under ``folder`` is whole, else what is wrong."""
-    for path in sorted(folder.glob("*.nb[ic]")):
-        try:
-            _pickle_complete(path.read_bytes())
-        except Exception as error:  # any unreadable file is a corrupt entry
-            return f"{path.name}: {type(error).__name__}: {error}"
-    return None
-
-
-def _prepare_entry(folder: Path, source: str, label: str, description: str) -> None:
-    """Make ``folder`` hold a whole, readable entry for ``source``; repair it when corrupt.
-
-    Other processes may be writing the same entry at the same time (dask workers starting
-    together): they write the same bytes, each file by an atomic rename, so a file is either
-    absent or whole, and only a file that is there and wrong counts as corrupt.
-    """
-    path = folder / SOURCE
-    problem = None
-    if path.exists():
-        body = _checked_source(path)
-        if body is None and not path.exists():
-            pass  # removed meanwhile by a process repairing it: written again below
-        elif body != source:
-            problem = f"{SOURCE} does not match its checksum"
-        else:
-            problem = _numba_files_ok(folder / "__pycache__")
-    if problem is not None:
-        warnings.warn(
-            f"softcell: the compiled-model cache entry {folder} is corrupt "
-            f"({problem}); rebuilding it",
-            CacheWarning,
-            stacklevel=4,
-        )
-        shutil.rmtree(folder / "__pycache__", ignore_errors=True)
-        path.unlink(missing_ok=True)
-    folder.mkdir(parents=True, exist_ok=True)
-    if not path.exists():
-        meta = {
-            "label": label,
-            "description": description,
-            "softcell": __version__,
-            "numba": numba.__version__,
-            "environment": environment_key(),
-            "created": datetime.datetime.now().isoformat(timespec="seconds"),
-        }
-        _write_atomic(folder / "entry.json", json.dumps(meta, indent=1) + "\n")
-        _write_atomic(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n" + source)
+    def place(self, label: str, key: str, source: str, description: str) -> str:
+        """Store ``source`` under ``key`` (once; repaired when corrupt) and return its
+        :meth:`location`, from which the module runs and beside which numba caches it.
+        Raises OSError or :class:`~softcell.errors.SoftcellError` when it cannot write."""
 
 
 def _execute(
@@ -391,27 +269,37 @@ def compile_module(
             stacklevel=2,
         )
         return _in_memory(label, source, bindings)
-    folder = cache_dir() / f"{label}-{key[:20]}"
+    store = module_store()
+    if store is None:
+        warnings.warn(
+            f"softcell: {label} is compiled in this process only: no module store is set "
+            "(softcell.config.use_module_store)",
+            CacheWarning,
+            stacklevel=2,
+        )
+        return _in_memory(label, source, bindings)
     with _LOCK:
-        if str(folder) in _LOADED:
-            return _LOADED[str(folder)]
+        where = store.location(label, key)
+        if where in _LOADED:
+            return _LOADED[where]
         try:
-            _prepare_entry(folder, source, label, description)
-        except OSError as error:
+            filename = store.place(label, key, source, description)
+        except (OSError, SoftcellError) as error:
             warnings.warn(
-                f"softcell: cannot write the compiled-model cache at {folder.parent} "
-                f"({error.strerror or error}); {label} is compiled in this process "
-                f"only (set {CACHE_ENV} to a writable folder)",
+                f"softcell: cannot write the compiled-model cache at "
+                f"{Path(where).parent.parent} ({getattr(error, 'strerror', None) or error}); "
+                f"{label} is compiled in this process only (set SOFTCELL_CACHE_DIR to a "
+                "writable folder)",
                 CacheWarning,
                 stacklevel=2,
             )
             return _in_memory(label, source, bindings)
         name = f"{_PARENT}.{label.replace('-', '_')}_{key[:20]}"
-        module = _execute(name, str(folder / SOURCE), source, bindings, _CACHED)
+        module = _execute(name, filename, source, bindings, _CACHED)
         for value in vars(module).values():
             if isinstance(value, CPUDispatcher) and value.py_func.__module__ == name:
                 _KEYS[id(value)] = key
-        _LOADED[str(folder)] = module
+        _LOADED[where] = module
         return module
 
 
@@ -420,39 +308,3 @@ def compiled_function(
 ) -> Callable[..., object]:
     """The compiled function ``name`` of :func:`compile_module`'s module."""
     return getattr(compile_module(label, source, bindings, description), name)
-
-
-def entries(root: Path | None = None) -> list[Entry]:
-    """The cache's entries, oldest first."""
-    root = cache_dir() if root is None else root
-    out: list[Entry] = []
-    if not root.is_dir():
-        return out
-    current = environment_key()
-    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
-        try:
-            meta = json.loads((folder / "entry.json").read_text())
-        except (OSError, ValueError):
-            meta = {}
-        size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
-        out.append(
-            Entry(
-                folder,
-                str(meta.get("label", "?")),
-                str(meta.get("description", "")),
-                str(meta.get("created", "?")),
-                size,
-                meta.get("environment") != current,
-            )
-        )
-    return sorted(out, key=lambda e: e.created)
-
-
-def clear(root: Path | None = None, stale_only: bool = False) -> int:
-    """Remove every entry (only the stale ones with ``stale_only``); return how many were
-    removed. Processes running from an entry keep what they loaded."""
-    root = cache_dir() if root is None else root
-    found = [e for e in entries(root) if e.stale or not stale_only]
-    for entry in found:
-        shutil.rmtree(entry.path, ignore_errors=True)
-    return len(found)

@@ -22,7 +22,7 @@ from softcell.core.plugin.contracts import (
     Integrator,
     check_kernels,
 )
-from softcell.core.plugin.registry import get_registry
+from softcell.core.plugin.registry import Registry
 
 
 @dataclass
@@ -101,6 +101,8 @@ def build_model(
     protocol: str,
     membrane: bool = True,
     friction_law: str = "viscous",
+    *,
+    registry: Registry,
 ) -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
 
@@ -117,13 +119,20 @@ def build_model(
         alone are kept (the arena's walls).
     friction_law : str
         Name of a registered friction law (``viscous``, the paper's, by default).
+    registry : Registry
+        Where the names are looked up (``default_registry()``: built-ins and installed
+        plugins).
+
+    Returns
+    -------
+    Model
+        The components instantiated for ``params`` and their composition, compiled.
 
     Raises
     ------
     ContractError
         When a component's kernel does not compile for its contract's signature.
     """
-    registry = get_registry()
     terms = [registry.get("energy_term", n)(params) for n in energy_terms]
     if not membrane:
         terms = [t for t in terms if t.acts_on_bot]
@@ -167,6 +176,7 @@ def build_model(
     )
 
 
-def build_integrator(name: str, params: Parameters) -> Integrator:
-    """Instantiate the named integrator (its ``check`` runs on ``params``)."""
-    return get_registry().get("integrator", name)(params)
+def build_integrator(name: str, params: Parameters, registry: Registry) -> Integrator:
+    """Instantiate the integrator ``name`` of ``registry`` (its ``check`` runs on
+    ``params``; values in the units of ``softcell params``)."""
+    return registry.get("integrator", name)(params)

@@ -288,7 +288,7 @@ class FrictionLaw(Component):
         "derivative_kernel": f"void({', '.join([VECTOR] * 7)})",
     }
     #: True only for v = f / membrane_friction exactly (the built-in ``viscous``): integrators
-    #: then move the modes by the force modes times 2 pi / (gamma_mem l0), as they always did.
+    #: then move the modes by the force modes times 2 pi / (gamma_mem l0) (the paper's law).
     linear: ClassVar[bool] = False
 
     @abstractmethod

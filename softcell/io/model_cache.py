@@ -1,0 +1,216 @@
+"""The compiled-model cache on disk: where it is, what an entry holds, writing and clearing it.
+
+:mod:`softcell.core.engine.compiled` keys each composed model and runs its generated source;
+this module keeps that source on disk, one directory per *entry*, so that numba caches the
+compiled functions beside it like those of any other module::
+
+    <cache>/<label>-<key>/model.py        the generated source, under a checksum header
+    <cache>/<label>-<key>/entry.json      what it is for (label, components, versions)
+    <cache>/<label>-<key>/__pycache__/    numba's own cache files of its functions
+
+Every file is written to a temporary name and renamed (:func:`softcell.io.files.atomic_write`),
+so processes starting at once (dask workers) see either no file or a whole one; a corrupt entry
+(a truncated file, say) is removed and rebuilt with a :class:`~softcell.errors.CacheWarning`.
+
+Location: ``$SOFTCELL_CACHE_DIR``, else the user cache directory (``platformdirs``), under
+``compiled/``.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import io
+import json
+import os
+import pickletools
+import shutil
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+from softcell._version import __version__
+from softcell.errors import CacheWarning
+
+#: Environment variable naming the cache's root directory.
+CACHE_ENV = "SOFTCELL_CACHE_DIR"
+
+#: Name of the generated source in each entry.
+SOURCE = "model.py"
+
+_HEADER = "# softcell compiled model; sha256 of the lines below: "
+
+
+def cache_dir() -> Path:
+    """The root of the compiled-model cache (created on first use)."""
+    env = os.environ.get(CACHE_ENV)
+    if env:
+        return Path(env).expanduser()
+    import platformdirs
+
+    return platformdirs.user_cache_path("softcell") / "compiled"
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One entry of the cache, as listed by ``softcell cache``."""
+
+    path: Path
+    label: str
+    description: str
+    created: str
+    size: int  # bytes, numba's files included
+    stale: bool  # made by another softcell build or numba, numpy, Python version
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+
+def _write(path: Path, text: str) -> None:
+    from softcell.io.files import atomic_write  # not at import: importing softcell stays cheap
+
+    with atomic_write(path, makedirs=False) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def _checked_source(path: Path) -> str | None:
+    """The body of a generated module whose header matches it, else None."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    first, _, body = text.partition("\n")
+    if first != _HEADER + hashlib.sha256(body.encode()).hexdigest():
+        return None
+    return body
+
+
+def _pickle_complete(data: bytes) -> None:
+    """Raise ValueError unless ``data`` is one or more whole pickles (read opcode by opcode,
+    so nothing is imported or built)."""
+    stream = io.BytesIO(data)
+    while stream.tell() < len(data):
+        for opcode, _, _ in pickletools.genops(stream):
+            if opcode.name == "STOP":
+                break
+        else:
+            raise ValueError("truncated pickle")
+
+
+def _numba_files_ok(folder: Path) -> str | None:
+    """None if every numba cache file under ``folder`` is whole, else what is wrong."""
+    for path in sorted(folder.glob("*.nb[ic]")):
+        try:
+            _pickle_complete(path.read_bytes())
+        except Exception as error:  # any unreadable file is a corrupt entry
+            return f"{path.name}: {type(error).__name__}: {error}"
+    return None
+
+
+def _entry_problem(folder: Path, source: str) -> str | None:
+    """What is wrong with an existing entry for ``source``, or None (also when it is absent,
+    or was removed meanwhile by a process repairing it: then it is written again)."""
+    path = folder / SOURCE
+    if not path.exists():
+        return None
+    body = _checked_source(path)
+    if body is None and not path.exists():
+        return None
+    if body != source:
+        return f"{SOURCE} does not match its checksum"
+    return _numba_files_ok(folder / "__pycache__")
+
+
+class DiskStore:
+    """The store of generated modules that :mod:`softcell.core.engine.compiled` uses: one
+    entry per key under :func:`cache_dir` (read when each module is placed, so
+    ``$SOFTCELL_CACHE_DIR`` may change within a session)."""
+
+    def location(self, label: str, key: str) -> str:
+        """The path of the source file of the entry of ``key``."""
+        return str(cache_dir() / f"{label}-{key[:20]}" / SOURCE)
+
+    def place(self, label: str, key: str, source: str, description: str) -> str:
+        """Make the entry of ``key`` hold a whole, readable copy of ``source``, repairing a
+        corrupt one, and return the path of its source file.
+
+        Other processes may be writing the same entry at the same time (dask workers
+        starting together): they write the same bytes, each file by an atomic rename, so a
+        file is either absent or whole, and only a file that is there and wrong is corrupt.
+
+        Raises
+        ------
+        OSError, softcell.errors.SoftcellError
+            When the cache cannot be written.
+        """
+        path = Path(self.location(label, key))
+        folder = path.parent
+        problem = _entry_problem(folder, source)
+        if problem is not None:
+            warnings.warn(
+                f"softcell: the compiled-model cache entry {folder} is corrupt "
+                f"({problem}); rebuilding it",
+                CacheWarning,
+                stacklevel=4,
+            )
+            shutil.rmtree(folder / "__pycache__", ignore_errors=True)
+            path.unlink(missing_ok=True)
+        folder.mkdir(parents=True, exist_ok=True)
+        if not path.exists():
+            _write(folder / "entry.json", json.dumps(_meta(label, description), indent=1) + "\n")
+            _write(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n" + source)
+        return str(path)
+
+
+def _meta(label: str, description: str) -> dict[str, str]:
+    import numba
+
+    from softcell.core.engine.compiled import environment_key
+
+    return {
+        "label": label,
+        "description": description,
+        "softcell": __version__,
+        "numba": numba.__version__,
+        "environment": environment_key(),
+        "created": datetime.datetime.now().isoformat(timespec="seconds"),
+    }
+
+
+def entries(root: Path | None = None) -> list[Entry]:
+    """The cache's entries, oldest first."""
+    from softcell.core.engine.compiled import environment_key
+
+    root = cache_dir() if root is None else root
+    out: list[Entry] = []
+    if not root.is_dir():
+        return out
+    current = environment_key()
+    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+        try:
+            meta = json.loads((folder / "entry.json").read_text())
+        except (OSError, ValueError):
+            meta = {}
+        size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
+        out.append(
+            Entry(
+                folder,
+                str(meta.get("label", "?")),
+                str(meta.get("description", "")),
+                str(meta.get("created", "?")),
+                size,
+                meta.get("environment") != current,
+            )
+        )
+    return sorted(out, key=lambda e: e.created)
+
+
+def clear(root: Path | None = None, stale_only: bool = False) -> int:
+    """Remove every entry (only the stale ones with ``stale_only``); return how many were
+    removed. Processes running from an entry keep what they loaded."""
+    root = cache_dir() if root is None else root
+    found = [e for e in entries(root) if e.stale or not stale_only]
+    for entry in found:
+        shutil.rmtree(entry.path, ignore_errors=True)
+    return len(found)

@@ -1,0 +1,180 @@
+"""What an output folder already holds for a request: files to reuse, to recompute, to remove.
+
+A finished file is reused only when it is complete and was made with exactly the request's
+settings (every parameter, the components, seed, spawn key, package version); a checkpoint
+only when it was made for the same request. Anything else stops the run with one line naming
+the first setting that differs and both values, unless the user asks to overwrite.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softcell.core.engine import sample_times
+from softcell.core.limits import file_bytes
+from softcell.errors import SoftcellError
+from softcell.workflows.tasks import Task, checkpoint_path, read_checkpoint, request_of
+
+
+def _shown(value: Any) -> str:
+    return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
+
+
+def first_mismatch(made: dict[str, Any], wanted: dict[str, Any]) -> str | None:
+    """``"radius = 4.0 there, 8.0 in this request"`` for the first setting (in the order of
+    ``wanted``) whose value differs, or None when every setting is equal."""
+    for key in [*wanted, *(k for k in made if k not in wanted)]:
+        there, here = made.get(key, "(none)"), wanted.get(key, "(none)")
+        if json.dumps(there, sort_keys=True) != json.dumps(here, sort_keys=True):
+            return f"{key} = {_shown(there)} there, {_shown(here)} in this request"
+    return None
+
+
+def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
+    """The settings a simulation file was made with, in the form of :meth:`Task.request`,
+    and its sample times (s).
+
+    Raises
+    ------
+    SoftcellError
+        If the file does not open or does not follow the schema.
+    """
+    from softcell.core.schema import problems
+    from softcell.io.netcdf import open_dataset
+
+    try:
+        ds = open_dataset(path)  # lazily: the membrane is not read
+    except SoftcellError:
+        raise SoftcellError("it is not a readable NetCDF file (truncated or corrupt)") from None
+    with ds:
+        found = problems(ds)
+        if found:
+            raise SoftcellError(f"it does not follow the simulation schema ({found[0]})")
+        a = ds.attrs
+        return request_of(
+            json.loads(a["softcell_parameters"]),
+            json.loads(a["softcell_components"]),
+            int(a["softcell_seed"]),
+            str(a.get("softcell_spawn_key")),
+            a.get("softcell_version"),
+        ), np.asarray(ds["time"].values)
+
+
+def _reuse_problem(path: Path, wanted: dict[str, Any], times: np.ndarray) -> str | None:
+    """Why the finished file ``path`` cannot stand for the request ``wanted``, or None."""
+    try:
+        made, stored = stored_request(path)
+    except SoftcellError as exc:
+        return f"cannot be reused: {exc}"
+    why = first_mismatch(made, wanted)
+    if why:
+        return f"was made with {why}"
+    if not np.array_equal(stored, times):
+        return f"is incomplete ({stored.size} samples, {times.size} expected)"
+    return None
+
+
+def _checkpoint_problem(checkpoint: Path, wanted: dict[str, Any]) -> str | None:
+    """Why the checkpoint cannot resume the request ``wanted``, or None."""
+    try:
+        made = json.loads(read_checkpoint(checkpoint)["request"] or "{}")
+        why = first_mismatch(made, wanted)
+        return why and f"was made with {why}"
+    except (SoftcellError, ValueError):
+        return "cannot be reused: it is truncated or corrupt"
+
+
+@dataclass
+class Resume:
+    """What an existing output directory holds for a request: tasks still to run, files to
+    remove first (``overwrite``), and how many finished files are reused."""
+
+    todo: list[Task]
+    remove: list[Path]
+    reused: int
+
+
+def _overwrite_hint(path: Path, why: str) -> SoftcellError:
+    return SoftcellError(
+        f"{path} {why}; rerun with --overwrite to recompute it (and every "
+        "other file that does not match), or write to another directory"
+    )
+
+
+def _stray_files(tasks: list[Task], out: Path) -> list[Path]:
+    """Simulation files in ``out`` that are no part of the request ``tasks``."""
+    from softcell.io.files import kind_of
+
+    planned = {Path(t.path).name for t in tasks}
+    return sorted(
+        p
+        for p in out.glob("*.nc")
+        if p.name not in planned and not p.name.startswith(".") and kind_of(p) == "simulation"
+    )
+
+
+def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Resume:
+    """Compare what ``out`` holds with the request ``tasks``, before anything runs.
+
+    Parameters
+    ----------
+    tasks : list of Task
+        The request, from :func:`softcell.workflows.ensemble.plan`.
+    out : Path
+        The output folder.
+    overwrite : bool
+        Remove and recompute what does not match instead of stopping.
+
+    Returns
+    -------
+    Resume
+        The tasks still to run, the files to remove first, the number of files reused.
+
+    Raises
+    ------
+    SoftcellError
+        Without ``overwrite``: for a file or checkpoint made with other settings, and for
+        simulation files in ``out`` that are no part of the request (they would be read as
+        part of the sweep), naming the first.
+    """
+    if not out.exists():
+        return Resume(list(tasks), [], 0)
+    resume = Resume([], [], 0)
+    for task in tasks:
+        path, checkpoint = Path(task.path), checkpoint_path(Path(task.path))
+        wanted = task.request()
+        if path.exists():
+            why = _reuse_problem(path, wanted, sample_times(task.params))
+            if why is None:
+                resume.reused += 1
+                continue
+            if not overwrite:
+                raise _overwrite_hint(path, why)
+            resume.remove.append(path)
+        if checkpoint.exists():
+            why = _checkpoint_problem(checkpoint, wanted)
+            if why is not None:
+                if not overwrite:
+                    raise _overwrite_hint(checkpoint, why)
+                resume.remove.append(checkpoint)
+        resume.todo.append(task)
+    stray = _stray_files(tasks, out)
+    if stray and not overwrite:
+        raise SoftcellError(
+            f"{out} holds {len(stray)} simulation file(s) that are no part of "
+            f"this request (e.g. {stray[0].name}), which would be read as part "
+            "of the sweep; rerun with --overwrite to remove them, or write to "
+            "another directory"
+        )
+    resume.remove.extend(stray)
+    return resume
+
+
+def expected_bytes(tasks: list[Task]) -> int:
+    """Disk space (bytes) the files of ``tasks`` will take, about."""
+    return sum(file_bytes(t.params) for t in tasks)

@@ -1,0 +1,292 @@
+"""One realization of an ensemble as a task: what it asks for, its checkpoint, and running it.
+
+A :class:`Task` is one (parameter point, realization) with its validated parameters, its
+components and its file. Realization r of point p draws from
+``SeedSequence(seed, spawn_key=(p, r))``, so a task's file does not depend on where or when it
+runs. A long realization checkpoints its state beside its file (``.<name>.ckpt.npz``), valid
+only for the request it was made for, so that a killed run resumes to the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+import zipfile
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softcell._version import __version__
+from softcell.config import CHECKPOINT_EVERY
+from softcell.core.engine import Model, Stepper, build_integrator, build_model
+from softcell.core.params import Parameters
+from softcell.core.plugin.registry import Registry, default_registry
+from softcell.core.realization import Saved, realization_rng, record_dataset, run_realization
+from softcell.errors import Interrupted, PluginWarning, SoftcellError
+from softcell.io.files import atomic_write
+
+#: A file in the output directory asking the realizations running on a cluster to save a
+#: checkpoint and stop (what Ctrl-C does to this process; see
+#: :func:`softcell.workflows.cluster.run_on_cluster`).
+STOP_FILE = ".softcell-stop"
+
+
+@dataclass(frozen=True)
+class Task:
+    """One (parameter point, realization) of an ensemble.
+
+    Attributes
+    ----------
+    point, realization : int
+        The indices of its parameter point and realization (its random stream's spawn key).
+    params : Parameters
+        The point's validated parameters (units of ``softcell params``).
+    components : dict
+        The component names by kind, as requested.
+    stored_components : dict
+        The component names as its file stores them: with ``membrane``, and for a free bot
+        only the energy terms that act on the bot alone (such as the arena).
+    seed : int
+        The root seed.
+    membrane : bool
+        False for a free bot.
+    path : str
+        Its file.
+    swept : tuple of str
+        Parameters stored as scalar coordinates too.
+    """
+
+    point: int
+    realization: int
+    params: Parameters
+    components: dict[str, Any]
+    stored_components: dict[str, Any]
+    seed: int
+    membrane: bool
+    path: str
+    swept: tuple[str, ...] = field(default=("radius",))
+
+    @property
+    def name(self) -> str:
+        return f"point {self.point} realization {self.realization}"
+
+    @property
+    def duration(self) -> float:
+        """Its simulated duration (s)."""
+        return float(self.params.duration)
+
+    def request(self) -> dict[str, Any]:
+        """Every setting a file or checkpoint of this task must have been made with, in the
+        order they are compared: each parameter, the components, seed, spawn key, version."""
+        params = json.loads(self.params.to_attrs()["softcell_parameters"])
+        return request_of(
+            params,
+            self.stored_components,
+            self.seed,
+            f"{self.point},{self.realization}",
+            __version__,
+        )
+
+
+def stored_components(
+    components: dict[str, Any], membrane: bool, registry: Registry
+) -> dict[str, Any]:
+    """The component names as a file stores them (see :attr:`Task.stored_components`)."""
+    stored = {**components, "membrane": membrane}
+    if not membrane:
+        names: Iterable[str] = components.get("energy_terms", [])
+        stored["energy_terms"] = [n for n in names if registry.get("energy_term", n).acts_on_bot]
+    return stored
+
+
+def request_of(
+    parameters: dict[str, Any],
+    components: dict[str, Any],
+    seed: Any,
+    spawn_key: Any,
+    version: Any,
+) -> dict[str, Any]:
+    """A request as compared between runs: ``"parameter NAME"`` for each parameter, then
+    ``"component KIND"``, ``"seed"``, ``"spawn key"``, ``"softcell version"``."""
+    return {
+        **{f"parameter {k}": v for k, v in parameters.items()},
+        **{f"component {k}": v for k, v in sorted(components.items())},
+        "seed": seed,
+        "spawn key": spawn_key,
+        "softcell version": version,
+    }
+
+
+def canonical(request: dict[str, Any]) -> str:
+    """A request as one JSON text (what a checkpoint stores)."""
+    return json.dumps(request, sort_keys=True)
+
+
+# -- checkpoints -----------------------------------------------------------------------------
+
+
+def checkpoint_path(path: Path) -> Path:
+    """The checkpoint of the realization whose file is ``path``."""
+    return path.with_name(f".{path.stem}.ckpt.npz")
+
+
+class FileCheckpoint:
+    """The checkpoint of one realization in a file (``.<name>.ckpt.npz`` beside its result),
+    valid only for the request it was made for (``fingerprint``, the task's request as JSON)."""
+
+    def __init__(self, path: Path, fingerprint: str):
+        self.path, self.fingerprint = path, fingerprint
+
+    def load(self) -> Saved | None:
+        if not self.path.exists():
+            return None
+        data = read_checkpoint(self.path)
+        if data["request"] != self.fingerprint:
+            raise SoftcellError(
+                f"checkpoint {self.path} was made for another request; "
+                "remove it or rerun with --overwrite"
+            )
+        return Saved(
+            int(data["next_sample"]),
+            data["modes_record"],
+            data["pose_record"],
+            {k.removeprefix("state_"): v for k, v in data.items() if k.startswith("state_")},
+        )
+
+    def save(self, saved: Saved) -> None:
+        save_checkpoint(
+            self.path,
+            self.fingerprint,
+            saved.next_sample,
+            saved.modes_record,
+            saved.pose_record,
+            saved.state,
+        )
+
+
+def save_checkpoint(
+    path: Path,
+    request: str,
+    next_sample: int,
+    rec_modes: np.ndarray,
+    rec_pose: np.ndarray,
+    state: dict[str, np.ndarray],
+) -> None:
+    """Write a checkpoint atomically: the request (JSON), the first sample still to compute,
+    the samples so far (modes in cm, pose in cm and rad) and the stepper's state arrays."""
+    with atomic_write(path) as tmp:
+        np.savez(
+            tmp,
+            request=np.array(request),
+            next_sample=np.array(next_sample),
+            modes_record=rec_modes[:next_sample],
+            pose_record=rec_pose[:next_sample],
+            **{f"state_{k}": v for k, v in state.items()},
+        )
+
+
+def read_checkpoint(path: Path) -> dict[str, Any]:
+    """The arrays of a checkpoint, ``request`` as a str; a one-line error if unreadable."""
+    try:
+        with np.load(path, allow_pickle=False) as saved:
+            data = {k: saved[k] for k in saved.files}
+        data["request"] = str(data.get("request", ""))
+        int(data["next_sample"])
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise SoftcellError(
+            f"checkpoint {path} is unreadable (truncated or corrupt: "
+            f"{type(exc).__name__}); rerun with --overwrite to start that "
+            "realization again"
+        ) from None
+    return data
+
+
+# -- running ---------------------------------------------------------------------------------
+
+_BUILT: dict[str, tuple[Model, Stepper]] = {}
+
+
+def _model_and_stepper(task: Task, registry: Registry) -> tuple[Model, Stepper]:
+    """The task's compiled model and stepper, built once per process and request."""
+    key = json.dumps([task.params.given, task.components, task.membrane], sort_keys=True)
+    if key not in _BUILT:
+        model = build_model(
+            task.params,
+            task.components["energy_terms"],
+            task.components["driving_protocol"],
+            membrane=task.membrane,
+            friction_law=task.components.get("friction_law", "viscous"),
+            registry=registry,
+        )
+        integrator = build_integrator(task.components["integrator"], task.params, registry)
+        _BUILT[key] = (model, integrator.build(model))
+    return _BUILT[key]
+
+
+def run_task(
+    task: Task,
+    progress: Callable[[float], None] | None = None,
+    checkpoint_every: float = CHECKPOINT_EVERY,
+    stoppable: bool = False,
+    registry: Registry | None = None,
+) -> str | None:
+    """Run one (point, realization) and write its file atomically; returns the path.
+
+    Parameters
+    ----------
+    task : Task
+        What to run.
+    progress : callable, optional
+        Called with the simulated seconds (s) advanced since its last call.
+    checkpoint_every : float
+        Wall seconds (s) between checkpoints.
+    stoppable : bool
+        On a cluster: :data:`STOP_FILE` appearing beside the file makes the realization save
+        its checkpoint and return None.
+    registry : Registry, optional
+        Where the components are looked up; on a cluster's worker, the built-ins and the
+        installed plugins of that worker.
+    """
+    from softcell.io.netcdf import write_dataset
+
+    if registry is None:
+        with warnings.catch_warnings():  # the command that planned the run has warned already
+            warnings.simplefilter("ignore", PluginWarning)
+            registry = default_registry()
+    model, stepper = _model_and_stepper(task, registry)
+    path = Path(task.path)
+    checkpoint = checkpoint_path(path)
+    stop_file = path.parent / STOP_FILE
+    try:
+        record = run_realization(
+            model,
+            stepper,
+            realization_rng(task.seed, task.point, task.realization),
+            label=task.name,
+            checkpoint=FileCheckpoint(checkpoint, canonical(task.request())),
+            checkpoint_every=checkpoint_every,
+            progress=progress,
+            stop=stop_file.exists if stoppable else None,
+        )
+    except Interrupted:
+        if not stoppable:
+            raise
+        return None  # asked to stop: the checkpoint is saved
+    ds = record_dataset(
+        record,
+        model,
+        realization=task.realization,
+        seed=task.seed,
+        components=task.stored_components,
+        extra_attrs={
+            "softcell_point": task.point,
+            "softcell_spawn_key": f"{task.point},{task.realization}",
+        },
+        scalar_coords=task.swept,
+    )
+    write_dataset(ds, path)
+    checkpoint.unlink(missing_ok=True)
+    return str(path)
