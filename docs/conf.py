@@ -65,8 +65,7 @@ def _units_missing(doc: str) -> list[str]:
         f"{section} {entry.name or entry.type!r}"
         for section in SECTIONS
         for entry in parsed[section]
-        if QUANTITY.search(entry.type)
-        and not UNIT.search(" ".join([entry.type, *entry.desc]))
+        if QUANTITY.search(entry.type) and not UNIT.search(" ".join([entry.type, *entry.desc]))
     ]
 
 

@@ -223,26 +223,12 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from softcell.core.schema import validate
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
-    from softcell.io.render import render
+    from softcell.io.render import parse_point, parse_size, render
 
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     ds = open_inputs([args.input])
-    try:
-        point = (
-            {k: int(v) for k, v in (item.split("=") for item in args.point.split(","))}
-            if args.point
-            else {}
-        )
-    except ValueError:
-        raise SoftcellError(
-            f"--point = {args.point!r} is not allowed: must be NAME=INDEX[,...] (e.g. radius=1)"
-        ) from None
-    try:
-        size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
-    except ValueError:
-        size = ()
-    if size is not None and len(size) != 2:
-        raise SoftcellError(f"--size = {args.size!r} is not allowed: must be WIDTHxHEIGHT px")
+    point = parse_point(args.point, "--point") if args.point else {}
+    size = parse_size(args.size, "--size") if args.size else None
     try:
         validate(ds)
     except SchemaError as exc:
@@ -278,16 +264,9 @@ def _cmd_render(args: argparse.Namespace) -> int:
 def _cmd_track(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import write_dataset
-    from softcell.io.video import codec, track
+    from softcell.io.video import codec, parse_origin, track
 
-    try:
-        origin = tuple(float(v) for v in args.origin.split(",")) if args.origin else (0.0, 0.0)
-    except ValueError:
-        origin = ()
-    if len(origin) != 2 or not all(map(math.isfinite, origin)):
-        raise SoftcellError(
-            f"--origin = {args.origin!r} is not allowed: must be X,Y, two finite coordinates in cm"
-        )
+    origin = parse_origin(args.origin, "--origin") if args.origin else (0.0, 0.0)
     if not args.video.is_file():
         raise SoftcellError(f"no such video file: {args.video}")
     check_output(args.output, "tracking", inputs=[args.video], overwrite=args.overwrite)
@@ -456,16 +435,10 @@ def _numbers(flag: str, raw: str | None) -> list[float] | None:
         raise SoftcellError(f"{flag} {raw!r} is not a comma-separated list of numbers") from None
 
 
-def _cmd_calibrate(args: argparse.Namespace) -> int:
+def _check_calibration_request(args: argparse.Namespace, radius, ipr) -> None:
+    """One line, before anything runs, for a calibration that cannot be done as asked."""
     from softcell.io.files import check_output
-    from softcell.workflows.calibrate import (
-        calibrate_bending,
-        calibrate_friction,
-        write_calibration,
-    )
 
-    radius = _numbers("--radius", args.radius)
-    ipr, ipr_error = _numbers("--ipr", args.ipr), _numbers("--ipr-error", args.ipr_error)
     if args.push_speed is None and ipr is None:
         raise SoftcellError(
             "nothing to calibrate: give --push-speed V (for gamma_mem) and/or "
@@ -476,6 +449,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             f"--radius has {len(radius)} value(s): with both calibrations give "
             "the push's radius first, then one radius per IPR value"
         )
+    if args.push_speed is not None and ipr is None and len(radius or []) > 1:
+        raise SoftcellError("--push-speed calibrates at one radius: give one --radius")
     if args.output is not None:
         check_output(
             args.output,
@@ -483,14 +458,24 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             overwrite=args.overwrite,
             inputs=[args.config] if args.config else [],
         )
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from softcell.workflows.calibrate import (
+        calibrate_bending,
+        calibrate_friction,
+        write_calibration,
+    )
+
+    radius = _numbers("--radius", args.radius)
+    ipr, ipr_error = _numbers("--ipr", args.ipr), _numbers("--ipr-error", args.ipr_error)
+    _check_calibration_request(args, radius, ipr)
     config = load_config(args.config) if args.config else RunConfig()
     workers = args.workers or 1
     options = {"seed": args.seed, "workers": workers, "log": None if args.quiet else _note}
     results = []
     if args.push_speed is not None:
         push_radius, radius = radius[0], radius[1:]
-        if ipr is None and radius:
-            raise SoftcellError("--push-speed calibrates at one radius: give one --radius")
         found = calibrate_friction(
             args.push_speed,
             push_radius,

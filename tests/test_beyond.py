@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from softcell.core.runconfig import RunConfig
-from softcell.workflows.beyond import VARIANTS, Variant, beyond
+from softcell.workflows.beyond import VARIANTS, beyond
 from softcell.workflows.reproduce import Design, VideoDesign
+from softcell.workflows.study import Variant
 
 TINY = Design(
     "tiny",

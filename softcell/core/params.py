@@ -117,15 +117,20 @@ class ParameterSpec:
                 "must be finite" if rest.startswith("any finite") else f"must be finite and {rest}",
                 self.unit,
             )
-        ok = True
-        if self.minimum is not None:
-            ok = value >= self.minimum if self.minimum_inclusive else value > self.minimum
-        if ok and self.maximum is not None:
-            ok = value <= self.maximum if self.maximum_inclusive else value < self.maximum
-        if ok and self.power_of_two:
-            ok = value > 0 and (int(value) & (int(value) - 1)) == 0
-        if not ok:
+        if not self._in_range(value):
             raise ParameterError(self.name, value, self.allowed(), self.unit)
+
+    def _in_range(self, value: float) -> bool:
+        """Whether a finite ``value`` is within the bounds (and a power of two if asked)."""
+        if self.minimum is not None and not (
+            value >= self.minimum if self.minimum_inclusive else value > self.minimum
+        ):
+            return False
+        if self.maximum is not None and not (
+            value <= self.maximum if self.maximum_inclusive else value < self.maximum
+        ):
+            return False
+        return not self.power_of_two or (value > 0 and (int(value) & (int(value) - 1)) == 0)
 
 
 def _positive(name: str, default: float, unit: str, long_name: str) -> ParameterSpec:

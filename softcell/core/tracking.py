@@ -289,12 +289,20 @@ class Tracker:
         :data:`PRIOR_MODES` Fourier modes about the GC, its deformations penalized and, when
         the radius is known, its mean radius held near it): the fine curve
         [MIDLINE_POINTS, 2] (cm), or None and a reason."""
-        count, labels, stats, centroids = cv2.connectedComponentsWithStats(band, connectivity=8)
-        if count <= 1:
-            return None, "no paper seen"
-        areas = stats[1:, cv2.CC_STAT_AREA]
         expected = self.expected_perimeter
         radius = None if expected is None else expected / (2 * np.pi)
+        seen = self._wall_seen(band, offset, radius)
+        if isinstance(seen, str):
+            return None, seen
+        return self._prior_fit(*seen, radius)
+
+    def _wall_seen(self, band: np.ndarray, offset: np.ndarray, radius: float | None):
+        """The paper's pixels that belong to the ring, as plate points (x, y) in cm, or the
+        reason there are none."""
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(band, connectivity=8)
+        if count <= 1:
+            return "no paper seen"
+        areas = stats[1:, cv2.CC_STAT_AREA]
         # The ring's pieces: no specks, and (the paper's colour fringes at far edges are
         # not the ring) near the largest piece, or near the last GC.
         keep = np.nonzero(areas >= max(3, 0.05 * areas.max()))[0] + 1
@@ -313,8 +321,12 @@ class Tracker:
             close = np.hypot(cx - cx[big], cy - cy[big]) < reach
         vv, uu = np.nonzero(np.isin(labels, keep[close]))
         if uu.size < 50:
-            return None, "too little of the wall seen"
-        x, y = self.frame.to_world(uu + offset[0], vv + offset[1], self.ring_z)
+            return "too little of the wall seen"
+        return self.frame.to_world(uu + offset[0], vv + offset[1], self.ring_z)
+
+    def _prior_fit(self, x: np.ndarray, y: np.ndarray, radius: float | None):
+        """The shape prior fitted to the wall seen at (x, y) (cm): the fine curve and ``""``,
+        or None and a reason."""
         center = self.gc
         if center is None:  # the circle through the paper seen (algebraic least squares)
             a = np.column_stack([2 * x, 2 * y, np.ones_like(x)])

@@ -222,6 +222,41 @@ def _inside(path: Path, directory: Path) -> bool:
     return True
 
 
+def _check_apart_from_input(path: Path, source: Path, directory: bool, option: str) -> None:
+    """Raise unless the output ``path`` is neither the input ``source``, nor inside it, nor
+    (for a directory output) holding it."""
+    if not source.exists():
+        return
+    if path.exists() and os.path.samefile(path, source):
+        raise SoftcellError(
+            f"{option} {path} is the input {source}: an output never "
+            "replaces an input; choose another name"
+        )
+    if source.is_dir() and _inside(path, source.resolve()):
+        raise SoftcellError(
+            f"{option} {path} is inside the input directory {source}: an "
+            "output there would be read as part of it; write it elsewhere"
+        )
+    if directory and source.is_file() and _inside(source.resolve(), path.resolve()):
+        raise SoftcellError(
+            f"{option} {path} holds the input {source}: write the outputs to another directory"
+        )
+
+
+def _check_replaceable(path: Path, kind: str, option: str) -> None:
+    """Raise unless the existing file ``path`` is a softcell output of ``kind`` (a rerun)."""
+    found = kind_of(path)
+    if found == kind:
+        return
+    if kind == "video":
+        what = "exists (a video carries no mark of who made it)"
+    elif found:
+        what = f"exists and is a softcell {found} file"
+    else:
+        what = f"exists and is not a softcell {kind} file"
+    raise SoftcellError(f"{option} {path} {what}; pass --overwrite to replace it")
+
+
 def check_output(
     path: str | os.PathLike[str],
     kind: str,
@@ -258,23 +293,7 @@ def check_output(
     """
     path = Path(os.path.abspath(path))
     for source in inputs:
-        source = Path(os.path.abspath(source))
-        if not source.exists():
-            continue
-        if path.exists() and os.path.samefile(path, source):
-            raise SoftcellError(
-                f"{option} {path} is the input {source}: an output never "
-                "replaces an input; choose another name"
-            )
-        if source.is_dir() and _inside(path, source.resolve()):
-            raise SoftcellError(
-                f"{option} {path} is inside the input directory {source}: an "
-                "output there would be read as part of it; write it elsewhere"
-            )
-        if directory and source.is_file() and _inside(source.resolve(), path.resolve()):
-            raise SoftcellError(
-                f"{option} {path} holds the input {source}: write the outputs to another directory"
-            )
+        _check_apart_from_input(path, Path(os.path.abspath(source)), directory, option)
     if directory:
         if path.exists() and not path.is_dir():
             raise SoftcellError(f"{option} {path} is an existing file, not a directory")
@@ -284,16 +303,7 @@ def check_output(
             f"(e.g. {path / ('out.mkv' if kind == 'video' else 'out.nc')})"
         )
     elif path.exists() and not overwrite:
-        found = kind_of(path)
-        if found != kind:
-            what = (
-                "exists (a video carries no mark of who made it)"
-                if kind == "video"
-                else f"exists and is a softcell {found} file"
-                if found
-                else f"exists and is not a softcell {kind} file"
-            )
-            raise SoftcellError(f"{option} {path} {what}; pass --overwrite to replace it")
+        _check_replaceable(path, kind, option)
     check_writable(path if directory else path.parent)
     return path
 

@@ -207,37 +207,77 @@ def open_inputs(
     return _combine(files, chunks)
 
 
-def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:
-    """Combine per-(point, realization) Datasets into one, adding swept-parameter dims."""
-    names = names or [f"dataset {i}" for i in range(len(parts))]
+def _stored_parameters(parts: list[xr.Dataset], names: list[str]) -> list[dict[str, Any]]:
+    """Each Dataset's parameters, as its ``softcell_parameters`` attribute stores them."""
     values = []
     for name, ds in zip(names, parts, strict=True):
         if "softcell_parameters" not in ds.attrs:
             raise SoftcellError(f"{name} has no softcell_parameters attribute")
         values.append(json.loads(ds.attrs["softcell_parameters"]))
-    keys = sorted(set().union(*values))
-    swept = [k for k in keys if len({json.dumps(v.get(k)) for v in values}) > 1]
-    # A parameter derived from another (duration from radius) is no dimension of its own: it
-    # becomes a coordinate along the one it follows.
+    return values
+
+
+def _followers(swept: list[str], values: list[dict[str, Any]]) -> dict[str, str]:
+    """The swept parameters derived from another (duration from radius), each with the one it
+    follows: no dimension of their own, they become coordinates along it."""
     follows: dict[str, str] = {}
-    for key in [k for k in swept if k in MODEL_PARAMETERS and MODEL_PARAMETERS[k].default is None]:
+    derived = [k for k in swept if k in MODEL_PARAMETERS and MODEL_PARAMETERS[k].default is None]
+    for key in derived:
         for other in [k for k in swept if k != key and k not in follows]:
             pairs = {(json.dumps(v.get(other)), json.dumps(v.get(key))) for v in values}
             if len(pairs) == len({a for a, _ in pairs}):
                 follows[key] = other
                 break
+    return follows
+
+
+def _with_sweep_coordinates(
+    ds: xr.Dataset,
+    vals: dict[str, Any],
+    swept: list[str],
+    follows: dict[str, str],
+    units: dict[str, str],
+) -> xr.Dataset:
+    """``ds`` with a length-1 dim per swept parameter, and its followers as coordinates."""
+    for key in swept:  # a file stores its swept parameters as scalar coordinates too
+        ds = ds.expand_dims(key) if key in ds.coords else ds.expand_dims({key: [vals[key]]})
+        ds[key].attrs = _coordinate_attrs(key, units.get(key, "1"))
+    for key, other in follows.items():
+        ds = ds.assign_coords(
+            {key: (other, [vals[key]], _coordinate_attrs(key, units.get(key, "1")))}
+        )
+    return ds
+
+
+def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:
+    """Combine per-(point, realization) Datasets into one, adding swept-parameter dims.
+
+    Parameters
+    ----------
+    parts : list of xarray.Dataset
+        One Dataset per file, each with its ``softcell_parameters`` (values in the units of
+        ``softcell_parameter_units``).
+    names : list of str, optional
+        How errors name each part (its file).
+
+    Returns
+    -------
+    xarray.Dataset
+        One dim per parameter that differs between the parts (a parameter derived from
+        another is a coordinate along it), with its unit; missing points filled with NaN
+        (``bot_phase``: -1).
+    """
+    names = names or [f"dataset {i}" for i in range(len(parts))]
+    values = _stored_parameters(parts, names)
+    keys = sorted(set().union(*values))
+    swept = [k for k in keys if len({json.dumps(v.get(k)) for v in values}) > 1]
+    follows = _followers(swept, values)
     swept = [k for k in swept if k not in follows]
     units = json.loads(parts[0].attrs.get("softcell_parameter_units", "{}"))
-    expanded = []
-    for ds, vals in zip(parts, values, strict=True):
-        for key in swept:  # a file stores its swept parameters as scalar coordinates too
-            ds = ds.expand_dims(key) if key in ds.coords else ds.expand_dims({key: [vals[key]]})
-            ds[key].attrs = _coordinate_attrs(key, units.get(key, "1"))
-        for key, other in follows.items():
-            ds = ds.assign_coords(
-                {key: (other, [vals[key]], _coordinate_attrs(key, units.get(key, "1")))}
-            )
-        expanded.append(ds)
+    expanded = [
+        _with_sweep_coordinates(ds, vals, swept, follows, units)
+        for ds, vals in zip(parts, values, strict=True)
+    ]
     fill = {"bot_phase": np.int8(-1)} if "bot_phase" in parts[0] else {}
     try:
         combined = xr.combine_by_coords(

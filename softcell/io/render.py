@@ -354,3 +354,36 @@ def _draw(
         alpha = layer.astype(np.float64)[..., None] / 255.0
         image = image * (1 - alpha) + alpha * np.asarray(colour, dtype=np.float64)
     return image
+
+
+def parse_point(text: str, option: str = "point") -> dict[str, int]:
+    """A sweep point written ``NAME=INDEX[,...]`` (``"radius=1"``), as ``{name: index}``.
+
+    Raises
+    ------
+    SoftcellError
+        Naming ``option`` and the text, for anything else.
+    """
+    try:
+        return {k: int(v) for k, v in (item.split("=") for item in text.split(","))}
+    except ValueError:
+        raise SoftcellError(
+            f"{option} = {text!r} is not allowed: must be NAME=INDEX[,...] (e.g. radius=1)"
+        ) from None
+
+
+def parse_size(text: str, option: str = "size") -> tuple[int, int]:
+    """A frame size written ``WIDTHxHEIGHT`` (px), as ``(width, height)``.
+
+    Raises
+    ------
+    SoftcellError
+        Naming ``option`` and the text, for anything else.
+    """
+    try:
+        size = tuple(int(v) for v in text.lower().split("x"))
+    except ValueError:
+        size = ()
+    if len(size) != 2:
+        raise SoftcellError(f"{option} = {text!r} is not allowed: must be WIDTHxHEIGHT px")
+    return size[0], size[1]

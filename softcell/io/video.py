@@ -9,6 +9,7 @@ from __future__ import annotations
 import collections
 import itertools
 import json
+import math
 import os
 import queue
 import threading
@@ -207,32 +208,19 @@ def track(
         first = next(frames, None)
         if first is None:
             raise SoftcellError(f"video file {video} has no readable frame (corrupt or empty)")
-        attrs: dict[str, object]
-        if plate_size is not None:
-            geometry = calibrate_from_plate(
-                first, plate_size, camera_height=camera_height, calibration=calibration
-            )
-            if ring_height or bot_height:
-                geometry.to_world(0.0, 0.0, max(ring_height, bot_height) / 2)  # or says why
-            attrs = {
-                "softcell_plate_size_cm": float(plate_size),
-                "softcell_camera": json.dumps(geometry.summary()),
-                "softcell_ring_height_cm": float(ring_height),
-                "softcell_bot_height_cm": float(bot_height),
-            }
-        else:
-            if px_per_cm is None:
-                if arena_size is None:
-                    raise SoftcellError(
-                        "pass px_per_cm, arena_size (cm) to derive it, or "
-                        "plate_size (cm) to calibrate from the plate"
-                    )
-                px_per_cm = width / arena_size
-            geometry = Frame(float(px_per_cm), width, height, float(origin[0]), float(origin[1]))
-            attrs = {
-                "softcell_px_per_cm": float(px_per_cm),
-                "softcell_origin_cm": np.array(origin, dtype=np.float64),
-            }
+        geometry, attrs = _geometry(
+            first,
+            width,
+            height,
+            plate_size=plate_size,
+            camera_height=camera_height,
+            calibration=calibration,
+            ring_height=ring_height,
+            bot_height=bot_height,
+            px_per_cm=px_per_cm,
+            arena_size=arena_size,
+            origin=origin,
+        )
         tracker = Tracker(
             geometry,
             nodes,
@@ -250,6 +238,64 @@ def track(
             )
     finally:
         capture.release()
+    failures = _failures(result, video)
+    return tracked_dataset(
+        result,
+        nodes=nodes,
+        radius=radius,
+        attrs={
+            "softcell_video": video.name,
+            "softcell_fps": rate,
+            **attrs,
+            "softcell_tracking_failures": json.dumps(dict(failures.most_common())),
+        },
+    )
+
+
+def _geometry(
+    first: np.ndarray,
+    width: int,
+    height: int,
+    *,
+    plate_size: float | None,
+    camera_height: float | None,
+    calibration: tuple[np.ndarray, np.ndarray] | None,
+    ring_height: float,
+    bot_height: float,
+    px_per_cm: float | None,
+    arena_size: float | None,
+    origin: tuple[float, float],
+) -> tuple[object, dict[str, object]]:
+    """The pixels-to-cm geometry of a video (calibrated from the plate in its ``first``
+    frame, or a linear frame) and the attributes that record it (lengths in cm)."""
+    if plate_size is not None:
+        geometry = calibrate_from_plate(
+            first, plate_size, camera_height=camera_height, calibration=calibration
+        )
+        if ring_height or bot_height:
+            geometry.to_world(0.0, 0.0, max(ring_height, bot_height) / 2)  # or says why
+        return geometry, {
+            "softcell_plate_size_cm": float(plate_size),
+            "softcell_camera": json.dumps(geometry.summary()),
+            "softcell_ring_height_cm": float(ring_height),
+            "softcell_bot_height_cm": float(bot_height),
+        }
+    if px_per_cm is None:
+        if arena_size is None:
+            raise SoftcellError(
+                "pass px_per_cm, arena_size (cm) to derive it, or "
+                "plate_size (cm) to calibrate from the plate"
+            )
+        px_per_cm = width / arena_size
+    geometry = Frame(float(px_per_cm), width, height, float(origin[0]), float(origin[1]))
+    return geometry, {
+        "softcell_px_per_cm": float(px_per_cm),
+        "softcell_origin_cm": np.array(origin, dtype=np.float64),
+    }
+
+
+def _failures(result, video: Path) -> collections.Counter:
+    """The tracking failures by kind; an error naming them when no frame was tracked."""
     failures = collections.Counter(r for r in result.reasons if r)
     if all(f == FLAGS["both_lost"] for f in result.flags):
         why = "; ".join(f"{n} x {reason}" for reason, n in failures.most_common())
@@ -262,17 +308,7 @@ def track(
             f"no frame of {video} was tracked: no plausible ring found in any "
             f"of its {len(result.flags)} frames: {why}{hint}"
         )
-    return tracked_dataset(
-        result,
-        nodes=nodes,
-        radius=radius,
-        attrs={
-            "softcell_video": video.name,
-            "softcell_fps": rate,
-            **attrs,
-            "softcell_tracking_failures": json.dumps(dict(failures.most_common())),
-        },
-    )
+    return failures
 
 
 def _check_camera_arguments(
@@ -298,17 +334,26 @@ def _check_camera_arguments(
             "linear frame instead: give one of them"
         )
     if plate_size is None:
-        for name, value in (
-            ("camera", camera),
-            ("camera_height", camera_height),
-            ("ring_height", ring_height or None),
-            ("bot_height", bot_height or None),
-        ):
-            if value is not None:
-                raise SoftcellError(
-                    f"{name} needs plate_size: parallax and lenses are "
-                    "corrected only with a camera calibrated from the plate"
-                )
+        _check_without_plate(camera, camera_height, ring_height, bot_height)
+    _check_detection_arguments(ring_threshold, dark_fraction)
+
+
+def _check_without_plate(camera, camera_height, ring_height, bot_height) -> None:
+    """Without a plate, nothing that needs a calibrated camera may be given."""
+    for name, value in (
+        ("camera", camera),
+        ("camera_height", camera_height),
+        ("ring_height", ring_height or None),
+        ("bot_height", bot_height or None),
+    ):
+        if value is not None:
+            raise SoftcellError(
+                f"{name} needs plate_size: parallax and lenses are "
+                "corrected only with a camera calibrated from the plate"
+            )
+
+
+def _check_detection_arguments(ring_threshold, dark_fraction) -> None:
     if ring_threshold is not None and not (np.isfinite(ring_threshold) and 0 < ring_threshold < 1):
         raise SoftcellError(
             f"ring_threshold = {ring_threshold} is not allowed: a redness "
@@ -480,3 +525,22 @@ def read_calibration(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
             f"calibration file {path} has no distortion_coefficients (4, 5, 8, 12 or 14 numbers)"
         )
     return matrix.astype(np.float64), dist.astype(np.float64).ravel()
+
+
+def parse_origin(text: str, option: str = "origin") -> tuple[float, float]:
+    """A plate position written ``X,Y`` (cm), as ``(x, y)``.
+
+    Raises
+    ------
+    SoftcellError
+        Naming ``option`` and the text, unless it is two finite numbers.
+    """
+    try:
+        origin = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        origin = ()
+    if len(origin) != 2 or not all(map(math.isfinite, origin)):
+        raise SoftcellError(
+            f"{option} = {text!r} is not allowed: must be X,Y, two finite coordinates in cm"
+        )
+    return origin[0], origin[1]

@@ -185,6 +185,71 @@ def _bot_local(p: np.ndarray, bot: np.ndarray, heading: float) -> tuple[np.ndarr
     return c * dx + s * dy, -s * dx + c * dy
 
 
+def _in_cast_shadow(
+    scene: Scene,
+    p0: np.ndarray,
+    light: np.ndarray,
+    top: float,
+    wall: _Membrane,
+    bot: np.ndarray,
+    heading: float,
+    a: float,
+    b: float,
+) -> np.ndarray:
+    """Where the plate points ``p0`` lie in a cast shadow: the ray from the plate point
+    towards the lamp meets the bot or the wall below their tops."""
+    blocked = np.zeros(p0.shape[:-1], bool)
+    previous = None
+    for z in np.linspace(0.0, top, 8):
+        q = p0 + z * light[:2]
+        if z <= scene.bot_height:
+            lx, ly = _bot_local(q, bot, heading)
+            blocked |= (lx / a) ** 2 + (ly / b) ** 2 <= 1
+        if z <= scene.ring_height:  # the light's ray meets the wall, or crosses it
+            sd = wall.sample(wall.sd, q)
+            blocked |= np.abs(sd) <= scene.wall / 2
+            if previous is not None:
+                blocked |= np.sign(sd) != np.sign(previous)
+            previous = sd
+    return blocked
+
+
+def _wall_colour(
+    scene: Scene, wall: _Membrane, p: np.ndarray, z: float, paper: np.ndarray, light: np.ndarray
+) -> np.ndarray:
+    """The paper's colour where the rays meet the wall at height ``z`` (cm): lit on top,
+    shaded on the side, with a highlight where it faces the lamp (off-red paper)."""
+    shade = 1.0 if z >= scene.ring_height - 1e-9 else 0.82
+    c = np.broadcast_to(paper * shade, (*p.shape[:-1], 3)).copy()
+    if scene.off_red:  # a highlight where the wall faces the lamp
+        n = np.stack([wall.sample(wall.nx, p), wall.sample(wall.ny, p)], axis=-1)
+        facing = np.abs(n @ (light[:2] / np.hypot(*light[:2])))
+        gloss = 0.5 * np.clip((facing - 0.9) / 0.1, 0, 1)[..., None]
+        c = c * (1 - gloss) + 250.0 * gloss
+    return c
+
+
+def _bot_colour(
+    scene: Scene,
+    lx: np.ndarray,
+    ly: np.ndarray,
+    z: float,
+    a: float,
+    b: float,
+    shape: tuple[int, ...],
+) -> np.ndarray:
+    """The bot's colour at body coordinates (lx, ly) (cm) met at height ``z`` (cm): its top
+    with the board and the LED, or its side."""
+    if z >= scene.bot_height - 1e-9:
+        c = np.broadcast_to(BOT_TOP, (*shape, 3)).copy()
+        pcb = (lx > -0.75 * a) & (lx < 0.1 * a) & (np.abs(ly) < 0.55 * b)
+        led = (lx - 0.7 * a) ** 2 + ly**2 <= (0.22 * b) ** 2
+        c[pcb] = PCB
+        c[led] = LED
+        return c
+    return np.broadcast_to(BOT_SIDE, (*shape, 3))
+
+
 def _shade_roi(
     scene: Scene,
     p0: np.ndarray,
@@ -206,19 +271,7 @@ def _shade_roi(
     # bot or the wall below their tops.
     light = np.array(scene.light) / scene.light[2]
     if scene.cast_shadow:
-        blocked = np.zeros(p0.shape[:-1], bool)
-        previous = None
-        for z in np.linspace(0.0, top, 8):
-            q = p0 + z * light[:2]
-            if z <= scene.bot_height:
-                lx, ly = _bot_local(q, bot, heading)
-                blocked |= (lx / a) ** 2 + (ly / b) ** 2 <= 1
-            if z <= scene.ring_height:  # the light's ray meets the wall, or crosses it
-                sd = wall.sample(wall.sd, q)
-                blocked |= np.abs(sd) <= scene.wall / 2
-                if previous is not None:
-                    blocked |= np.sign(sd) != np.sign(previous)
-                previous = sd
+        blocked = _in_cast_shadow(scene, p0, light, top, wall, bot, heading, a, b)
         colour = colour * (1 - scene.cast_shadow * blocked[..., None])
     paper = (
         np.array(scene.paper)
@@ -239,26 +292,31 @@ def _shade_roi(
         new_wall = on_wall & ~hit & ~(in_bot & (z >= scene.ring_height))
         new_bot = in_bot & ~hit & ~new_wall
         if new_wall.any():
-            shade = 1.0 if z >= scene.ring_height - 1e-9 else 0.82
-            c = np.broadcast_to(paper * shade, (*p0.shape[:-1], 3)).copy()
-            if scene.off_red:  # a highlight where the wall faces the lamp
-                n = np.stack([wall.sample(wall.nx, p), wall.sample(wall.ny, p)], axis=-1)
-                facing = np.abs(n @ (light[:2] / np.hypot(*light[:2])))
-                gloss = 0.5 * np.clip((facing - 0.9) / 0.1, 0, 1)[..., None]
-                c = c * (1 - gloss) + 250.0 * gloss
+            c = _wall_colour(scene, wall, p, z, paper, light)
             colour = np.where(new_wall[..., None], c, colour)
         if new_bot.any():
-            if z >= scene.bot_height - 1e-9:
-                c = np.broadcast_to(BOT_TOP, (*p0.shape[:-1], 3)).copy()
-                pcb = (lx > -0.75 * a) & (lx < 0.1 * a) & (np.abs(ly) < 0.55 * b)
-                led = (lx - 0.7 * a) ** 2 + ly**2 <= (0.22 * b) ** 2
-                c[pcb] = PCB
-                c[led] = LED
-            else:
-                c = np.broadcast_to(BOT_SIDE, (*p0.shape[:-1], 3))
+            c = _bot_colour(scene, lx, ly, z, a, b, p0.shape[:-1])
             colour = np.where(new_bot[..., None], c, colour)
         hit |= new_wall | new_bot
     return colour
+
+
+def _roi_box(scene: Scene, fine: np.ndarray) -> tuple[int, int, int, int]:
+    """The pixels (u0, v0, u1, v1) that can see the cell whose wall is ``fine`` (cm): the
+    projection of its bounding box, 1 cm larger, from the plate to the wall's top."""
+    lo = fine.min(axis=0) - 1.0
+    hi = fine.max(axis=0) + 1.0
+    us, vs = [], []
+    for z in (0.0, scene.ring_height):
+        for x in (lo[0], hi[0]):
+            for y in (lo[1], hi[1]):
+                u, v = scene.project(x, y, z)
+                us.append(u)
+                vs.append(v)
+    n = scene.size
+    u0, v0 = max(int(min(us)) - 4, 0), max(int(min(vs)) - 4, 0)
+    u1, v1 = min(int(max(us)) + 5, n), min(int(max(vs)) + 5, n)
+    return u0, v0, u1, v1
 
 
 def film(
@@ -336,17 +394,7 @@ def film(
                 curve, bot, heading, gc = state(t + dt)
                 fine = _fine(curve, 1440)
                 wall = _Membrane(fine)
-                lo = fine.min(axis=0) - 1.0
-                hi = fine.max(axis=0) + 1.0
-                us, vs = [], []
-                for z in (0.0, scene.ring_height):
-                    for x in (lo[0], hi[0]):
-                        for y in (lo[1], hi[1]):
-                            u, v = scene.project(x, y, z)
-                            us.append(u)
-                            vs.append(v)
-                u0, v0 = max(int(min(us)) - 4, 0), max(int(min(vs)) - 4, 0)
-                u1, v1 = min(int(max(us)) + 5, n), min(int(max(vs)) + 5, n)
+                u0, v0, u1, v1 = _roi_box(scene, fine)
                 p0 = rays[0][v0:v1, u0:u1]
                 g = rays[1][v0:v1, u0:u1]
                 roi = _shade_roi(scene, p0, g, wall, bot, heading, a, b).mean(axis=(2, 3))

@@ -21,37 +21,16 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS
-from softcell.workflows.reproduce import QUICK, Design, reproduce
-
-
-@dataclass(frozen=True)
-class Variant:
-    """One model variant of a study: components and parameters over the quick design's.
-
-    ``name`` is its folder, ``label`` its legend; ``unknown`` names what it varies (the
-    sensitivity study groups its variants by it; empty for the reference).
-    """
-
-    name: str
-    label: str
-    components: dict[str, Any] = field(default_factory=dict)
-    parameters: dict[str, Any] = field(default_factory=dict)
-    unknown: str = ""
-
-    def design(self, base: Design = QUICK) -> Design:
-        return replace(
-            base,
-            name=f"{base.name}-{self.name}",
-            components={**DEFAULT_COMPONENTS, **self.components},
-            parameters={**base.parameters, **self.parameters},
-        )
+from softcell.io.study_figures import friction_figures
+from softcell.workflows.findings import cell_values
+from softcell.workflows.reproduce import QUICK, Design
+from softcell.workflows.study import Variant, run_variants, table_row
 
 
 def _coulomb(threshold: float) -> Variant:
@@ -112,39 +91,6 @@ def _free_long(
         write_dataset(analysis, folder.parent / f"{name}_analysis.nc")
 
 
-def run_variants(
-    out: Path,
-    variants: tuple[Variant, ...],
-    base: Design,
-    *,
-    seed: int,
-    workers: int | None,
-    overwrite: bool,
-    progress: bool,
-    log: Callable[[str], None] | None,
-) -> None:
-    """Reproduce each variant of ``base`` into ``out/<variant>`` from one root seed; a
-    variant that finished there (same design, seed and version) is kept as it is."""
-    from softcell.workflows.reproduce import finished
-
-    say = log or (lambda _: None)
-    for i, variant in enumerate(variants):
-        design, folder = variant.design(base), out / variant.name
-        if not overwrite and finished(folder, design, seed):
-            say(f"variant {i + 1}/{len(variants)}: {variant.label} (finished, kept)")
-            continue
-        say(f"variant {i + 1}/{len(variants)}: {variant.label}")
-        reproduce(
-            folder,
-            design,
-            seed=seed,
-            workers=workers,
-            overwrite=overwrite,
-            progress=progress,
-            log=log,
-        )
-
-
 def beyond(
     out: str | os.PathLike[str],
     *,
@@ -201,10 +147,6 @@ def beyond(
 # -- the comparison ---------------------------------------------------------------------------
 
 
-def _cell(ds, name: str) -> np.ndarray:
-    return np.asarray(ds[name].sel(body="cell").values, dtype=float)
-
-
 def _shape_by_phase(analysis) -> tuple[np.ndarray, np.ndarray]:
     """Mean IPR excess over a circle's 2 sqrt(pi), per radius, during the cell's stop and
     during its go samples."""
@@ -239,8 +181,8 @@ def measure(folder: Path) -> dict[str, Any]:
     confined = free["confined_diffusion_coefficient"].sel(body="bot")
     return {
         "radius": [float(r) for r in analysis["radius"].values],
-        "mean_stop_duration": _cell(analysis, "mean_stop_duration").tolist(),
-        "mean_go_duration": _cell(analysis, "mean_go_duration").tolist(),
+        "mean_stop_duration": cell_values(analysis, "mean_stop_duration").tolist(),
+        "mean_go_duration": cell_values(analysis, "mean_go_duration").tolist(),
         "ipr_mean": np.asarray(analysis["ipr_mean"].values, dtype=float).tolist(),
         "ipr_excess_stop": stop_excess.tolist(),
         "ipr_excess_go": go_excess.tolist(),
@@ -282,60 +224,11 @@ def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIA
         results["free_bot_long"] = long
     with atomic_write(out / "beyond.json") as tmp:
         tmp.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
-    figures = _figures(out / "figures", variants, results)
+    figures = friction_figures(out / "figures", variants, results, FREE_LONG[1])
     text = _markdown(variants, results, figures)
     with atomic_write(out / "beyond.md") as tmp:
         tmp.write_text(text, encoding="utf-8")
     return out / "beyond.md"
-
-
-def _figures(folder: Path, variants, results) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    folder.mkdir(parents=True, exist_ok=True)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
-    for v in variants:
-        r = results[v.name]
-        axes[0].plot(r["radius"], r["mean_stop_duration"], "o-", label=v.label)
-        axes[1].plot(r["radius"], r["mean_go_duration"], "o-", label=v.label)
-        axes[2].plot(r["radius"], np.array(r["ipr_excess_stop"]), "o-", label=v.label)
-    axes[0].set(xlabel="R (cm)", ylabel="<tau_s> (s)", title="mean stop duration (cell)")
-    axes[1].set(xlabel="R (cm)", ylabel="<tau_g> (s)", title="mean go duration (cell)")
-    axes[2].set(
-        xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log", title="shape excess during stops"
-    )
-    axes[0].legend(fontsize=7)
-    fig.savefig(folder / "friction.png", dpi=120)
-    plt.close(fig)
-
-    from softcell.core.analysis.fits import confined_square_msd
-
-    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
-    renewal = results[variants[0].name]["free_renewal_d"]
-    long = results.get("free_bot_long", {})
-    for name, r in long.items():
-        ax.loglog(r["lag"], r["msd"], label=f"free bot, {name} ({FREE_LONG[1]:g} s runs)")
-    if "arena" in long:
-        lag = np.asarray(long["arena"]["lag"])
-        d = long["arena"]["confined_d"]
-        ax.loglog(
-            lag, confined_square_msd(lag, d, 100.0), "k--", label=f"confined fit, D = {d:.1f} cm2/s"
-        )
-        ax.loglog(
-            lag,
-            confined_square_msd(lag, renewal, 100.0),
-            "k:",
-            label=f"confined formula at the renewal D = {renewal:.2f}",
-        )
-        ax.axhline(100.0**2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
-    ax.set(xlabel="lag (s)", ylabel="MSD (cm2)", title="free bot: open floor and 1 m arena")
-    ax.legend(fontsize=7)
-    fig.savefig(folder / "arena.png", dpi=120)
-    plt.close(fig)
-    return ["friction.png", "arena.png"]
 
 
 def claims(reference: dict[str, Any], variant: dict[str, Any]) -> dict[str, float]:
@@ -352,10 +245,6 @@ def claims(reference: dict[str, Any], variant: dict[str, Any]) -> dict[str, floa
         "stop_large": float(np.nanmean(ratio["mean_stop_duration"][radius >= 10])),
         "go": float(np.nanmedian(ratio["mean_go_duration"])),
     }
-
-
-def _row(cells) -> str:
-    return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
 def _fmt(values, digits=3) -> str:
@@ -376,24 +265,28 @@ def _markdown(variants, results, figures) -> str:
         "",
         "## The paper's findings, per variant",
         "",
-        _row(["finding", *[v.label for v in variants]]),
-        _row(["---"] * (len(variants) + 1)),
+        table_row(["finding", *[v.label for v in variants]]),
+        table_row(["---"] * (len(variants) + 1)),
     ]
     for name in base["verdicts"]:
-        lines.append(_row([name, *[results[v.name]["verdicts"].get(name, "-") for v in variants]]))
+        lines.append(
+            table_row([name, *[results[v.name]["verdicts"].get(name, "-") for v in variants]])
+        )
     lines += [
         "",
         "## What static friction is claimed to do",
         "",
         f"Radii: {_fmt(radii)} cm.",
         "",
-        _row(["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops", "IPR excess, goes"]),
-        _row(["---"] * 5),
+        table_row(
+            ["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops", "IPR excess, goes"]
+        ),
+        table_row(["---"] * 5),
     ]
     for v in variants:
         r = results[v.name]
         lines.append(
-            _row(
+            table_row(
                 [
                     v.label,
                     _fmt(r["mean_stop_duration"]),
@@ -407,7 +300,7 @@ def _markdown(variants, results, figures) -> str:
         "",
         "Against the paper's model (ratios to `viscous`, same seed):",
         "",
-        _row(
+        table_row(
             [
                 "variant",
                 "IPR excess during stops (median over R)",
@@ -415,12 +308,14 @@ def _markdown(variants, results, figures) -> str:
                 "<tau_g> (median over R)",
             ]
         ),
-        _row(["---"] * 4),
+        table_row(["---"] * 4),
     ]
     for v in variants[1:]:
         c = claims(base, results[v.name])
         lines.append(
-            _row([v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}", f"{c['go']:.3g}"])
+            table_row(
+                [v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}", f"{c['go']:.3g}"]
+            )
         )
     lines += [
         "",
@@ -441,14 +336,14 @@ def _markdown(variants, results, figures) -> str:
             f"about its centre), whose renewal D is {renewal:.2f} cm2/s; the "
             "confined-square formula (L = 100 cm) fitted to its MSD:",
             "",
-            _row(
+            table_row(
                 ["floor", "confined-fit D (cm2/s)", "fit / renewal", "MSD at the longest lag (cm2)"]
             ),
-            _row(["---"] * 4),
+            table_row(["---"] * 4),
         ]
         for name, r in long.items():
             lines.append(
-                _row(
+                table_row(
                     [
                         name,
                         f"{r['confined_d']:.2f}",

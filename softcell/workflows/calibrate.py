@@ -287,6 +287,67 @@ def calibrate_friction(
         )
 
 
+def _checked_ipr(
+    ipr: Sequence[float], radius: Sequence[float], ipr_error: Sequence[float] | None
+) -> tuple[list[float], list[float], list[float]]:
+    """The IPR values (1), radii (cm) and the IPRs' errors (1) of a calibration, checked."""
+    ipr = _positive("IPR", ipr, "1")
+    radius = _positive("radius", radius, "cm")
+    if len(ipr) != len(radius):
+        raise SoftcellError(
+            f"{len(ipr)} IPR value(s) for {len(radius)} radius value(s): give one IPR per radius"
+        )
+    circle = 2 * math.sqrt(math.pi)
+    low = [v for v in ipr if v <= circle]
+    if low:
+        raise SoftcellError(
+            f"IPR = {low[0]:g} is not allowed: a closed curve's IPR is at "
+            f"least a circle's 2 sqrt(pi) = {circle:.5f}"
+        )
+    errors = [0.0] * len(ipr) if ipr_error is None else [float(e) for e in ipr_error]
+    if len(errors) != len(ipr) or any(not (math.isfinite(e) and e >= 0) for e in errors):
+        raise SoftcellError(
+            f"IPR errors {errors} are not allowed: one finite value >= 0 per radius"
+        )
+    return ipr, radius, errors
+
+
+def _best_log_k(
+    residual: Callable[[float], np.ndarray],
+    weights: Callable[[float], np.ndarray],
+    k0: float,
+    ipr: list[float],
+    radius: list[float],
+) -> float:
+    """ln k (k in N cm2) within [k0 / 30, 30 k0]: the root of the residual at one radius, the
+    weighted least squares at several."""
+    from scipy.optimize import brentq, minimize_scalar
+
+    lo, hi = math.log(k0 / 30), math.log(k0 * 30)
+    if len(radius) == 1:
+        r_lo, r_hi = residual(lo)[0], residual(hi)[0]
+        if r_lo < 0 or r_hi > 0:
+            raise SoftcellError(
+                f"IPR = {ipr[0]:g} at R = {radius[0]:g} cm is out of reach for k in "
+                f"[{k0 / 30:.3g}, {k0 * 30:.3g}] N cm2 (simulated {r_hi + ipr[0]:.6f} to "
+                f"{r_lo + ipr[0]:.6f})"
+            )
+        return brentq(lambda x: residual(x)[0], lo, hi, xtol=ROOT_TOLERANCE)
+
+    def cost(x: float) -> float:
+        return float(np.sum((residual(x) / weights(x)) ** 2))
+
+    log_k = float(
+        minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": FIT_TOLERANCE}).x
+    )
+    if min(log_k - lo, hi - log_k) < 0.01:
+        raise SoftcellError(
+            f"the best k lies at the edge of [{k0 / 30:.3g}, "
+            f"{k0 * 30:.3g}] N cm2: the IPR values are out of reach"
+        )
+    return log_k
+
+
 def calibrate_bending(
     ipr: Sequence[float],
     radius: Sequence[float],
@@ -310,27 +371,8 @@ def calibrate_bending(
     ``duration`` s per radius and averages from ``settle`` s on. The search spans k from 1/30
     to 30 times the configuration's; a measured IPR below a circle's 2 sqrt(pi) is refused.
     """
-    from scipy.optimize import brentq, minimize_scalar
-
     config = config or RunConfig()
-    ipr = _positive("IPR", ipr, "1")
-    radius = _positive("radius", radius, "cm")
-    if len(ipr) != len(radius):
-        raise SoftcellError(
-            f"{len(ipr)} IPR value(s) for {len(radius)} radius value(s): give one IPR per radius"
-        )
-    circle = 2 * math.sqrt(math.pi)
-    low = [v for v in ipr if v <= circle]
-    if low:
-        raise SoftcellError(
-            f"IPR = {low[0]:g} is not allowed: a closed curve's IPR is at "
-            f"least a circle's 2 sqrt(pi) = {circle:.5f}"
-        )
-    errors = [0.0] * len(ipr) if ipr_error is None else [float(e) for e in ipr_error]
-    if len(errors) != len(ipr) or any(not (math.isfinite(e) and e >= 0) for e in errors):
-        raise SoftcellError(
-            f"IPR errors {errors} are not allowed: one finite value >= 0 per radius"
-        )
+    ipr, radius, errors = _checked_ipr(ipr, radius, ipr_error)
     _common(realizations, duration, settle, workers)
     k0 = _default(config, "bending_stiffness")
     measured = np.asarray(ipr)
@@ -373,31 +415,7 @@ def calibrate_bending(
             err = np.hypot(np.asarray(errors), sims)
             return np.where(err > 0, err, 1.0)
 
-        lo, hi = math.log(k0 / 30), math.log(k0 * 30)
-        if len(radius) == 1:
-            r_lo, r_hi = residual(lo)[0], residual(hi)[0]
-            if r_lo < 0 or r_hi > 0:
-                raise SoftcellError(
-                    f"IPR = {ipr[0]:g} at R = {radius[0]:g} cm is out of reach for k in "
-                    f"[{k0 / 30:.3g}, {k0 * 30:.3g}] N cm2 (simulated {r_hi + ipr[0]:.6f} to "
-                    f"{r_lo + ipr[0]:.6f})"
-                )
-            log_k = brentq(lambda x: residual(x)[0], lo, hi, xtol=ROOT_TOLERANCE)
-        else:
-
-            def cost(x: float) -> float:
-                return float(np.sum((residual(x) / weights(x)) ** 2))
-
-            log_k = float(
-                minimize_scalar(
-                    cost, bounds=(lo, hi), method="bounded", options={"xatol": FIT_TOLERANCE}
-                ).x
-            )
-            if min(log_k - lo, hi - log_k) < 0.01:
-                raise SoftcellError(
-                    f"the best k lies at the edge of [{k0 / 30:.3g}, "
-                    f"{k0 * 30:.3g}] N cm2: the IPR values are out of reach"
-                )
+        log_k = _best_log_k(residual, weights, k0, ipr, radius)
         step = math.log1p(SLOPE_STEP)
         slope = (residual(log_k + step) - residual(log_k - step)) / (2 * step)  # per ln k
         at = values(log_k)

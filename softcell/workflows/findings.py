@@ -22,7 +22,9 @@ class Finding:
     rule: str  # how the verdict follows from the numbers
 
 
-def _cell(analysis: xr.Dataset, name: str) -> np.ndarray:
+def cell_values(analysis: xr.Dataset, name: str) -> np.ndarray:
+    """The cell's (``body = "cell"``) values of the analysis variable ``name``, as floats in
+    the variable's own unit."""
     return np.asarray(analysis[name].sel(body="cell").values, dtype=float)
 
 
@@ -58,27 +60,32 @@ def _trend_finding(
     )
 
 
-def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[Finding]:
-    """The paper's findings beside the measured values of a radius sweep's analysis."""
-    radii = np.asarray(analysis["radius"].values, dtype=float)
-    regime = np.asarray(analysis["regime"].values, dtype=int)
-    ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
-    rows = []
-
-    names = ", ".join(
-        f"{r:g}: {REGIME_NAMES[g]} ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)
-    )
+def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
     small = [regime[i] for i, r in enumerate(radii) if r in (4.0, 5.0)]
     large = [regime[i] for i, r in enumerate(radii) if r >= 12.0]
     monotone = bool(np.all(np.diff(regime) >= 0))
     if not small or not large:
-        verdict = "not measured"
-    elif all(g == 0 for g in small) and all(g == 2 for g in large) and monotone:
-        verdict = "agrees"
-    elif small[0] == 0 and all(g == 2 for g in large):
-        verdict = "partly"
-    else:
-        verdict = "differs"
+        return "not measured"
+    if all(g == 0 for g in small) and all(g == 2 for g in large) and monotone:
+        return "agrees"
+    if small[0] == 0 and all(g == 2 for g in large):
+        return "partly"
+    return "differs"
+
+
+def _regime_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The regime per radius."""
+    rows: list[Finding] = []
+    names = ", ".join(
+        f"{r:g}: {REGIME_NAMES[g]} ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)
+    )
+    verdict = _regime_verdict(radii, regime)
     rows.append(
         Finding(
             "regime per R",
@@ -89,18 +96,29 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "partly: 4 cm coupled and >= 12 cm decoupled",
         )
     )
+    return rows
 
+
+def _trend_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """<tau_s>, <tau_g>, the ballistic velocity and D hat against R."""
+    rows: list[Finding] = []
     rows.append(
         _trend_finding(
             "<tau_s> against R",
             "increases monotonically with R",
             radii,
-            _cell(analysis, "mean_stop_duration"),
+            cell_values(analysis, "mean_stop_duration"),
             "s",
             +1,
         )
     )
-    tau_g = _cell(analysis, "mean_go_duration")
+    tau_g = cell_values(analysis, "mean_go_duration")
     if np.isfinite(tau_g).any():
         peak = int(np.nanargmax(tau_g))
         dec = regime == 2
@@ -130,7 +148,7 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "ballistic velocity against R",
             "decreases with R (Fig. 4a)",
             radii,
-            _cell(analysis, "ballistic_velocity"),
+            cell_values(analysis, "ballistic_velocity"),
             "cm/s",
             -1,
         )
@@ -140,12 +158,23 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "D hat (fitted MSD slope) against R",
             "decreases with R (Fig. 4b)",
             radii,
-            _cell(analysis, "msd_slope"),
+            cell_values(analysis, "msd_slope"),
             "cm2/s",
             -1,
         )
     )
+    return rows
 
+
+def _collapse_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The scaling collapse of the decoupled radii."""
+    rows: list[Finding] = []
     if "collapse_metric" in analysis:
         metric = np.asarray(analysis["collapse_metric"].values, dtype=float)
         variants = [str(v) for v in analysis["collapse_variant"].values]
@@ -173,8 +202,19 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
                 "agrees: the paper's variant has the smallest spread of the four",
             )
         )
+    return rows
 
-    fit, theory = _cell(analysis, "ballistic_velocity"), _cell(analysis, "v0_hat")
+
+def _theory_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The theory's v0 hat and D hat against the fits."""
+    rows: list[Finding] = []
+    fit, theory = cell_values(analysis, "ballistic_velocity"), cell_values(analysis, "v0_hat")
     dev = np.abs(fit / theory - 1)
     rows.append(
         Finding(
@@ -186,7 +226,7 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "agrees: within 10 % at every R",
         )
     )
-    fit, theory = _cell(analysis, "msd_slope"), _cell(analysis, "msd_slope_theory")
+    fit, theory = cell_values(analysis, "msd_slope"), cell_values(analysis, "msd_slope_theory")
     q = fit / theory
     big = radii >= 10
     rows.append(
@@ -199,8 +239,22 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "agrees: fit / theory > 1 at every R >= 10 cm",
         )
     )
+    return rows
 
-    ks_go, ks_stop = _cell(analysis, "go_ks_statistic"), _cell(analysis, "stop_ks_statistic")
+
+def _duration_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The stop and go durations' distributions."""
+    rows: list[Finding] = []
+    ks_go, ks_stop = (
+        cell_values(analysis, "go_ks_statistic"),
+        cell_values(analysis, "stop_ks_statistic"),
+    )
     rows.append(
         Finding(
             "stop and go durations",
@@ -212,7 +266,18 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
             "a reading of Fig. S2; no verdict is computed",
         )
     )
+    return rows
 
+
+def _bot_msd_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The bot's MSD inside the membrane against the free bot's."""
+    rows: list[Finding] = []
     if free_bot is not None:
         lag = analysis["lag"].values
         free = free_bot["msd"].sel(body="bot")
@@ -234,7 +299,18 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
                 "agrees: the short-lag ratio stays above 0.5 at every R",
             )
         )
+    return rows
 
+
+def _merge_findings(
+    analysis: xr.Dataset,
+    free_bot: xr.Dataset | None,
+    radii: np.ndarray,
+    regime: np.ndarray,
+    ratio: np.ndarray,
+) -> list[Finding]:
+    """The bot's and the cell's MSD at R = 12 cm."""
+    rows: list[Finding] = []
     i12 = np.flatnonzero(radii == 12.0)
     if i12.size:
         msd = analysis["msd"].isel(radius=int(i12[0]))
@@ -252,4 +328,27 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
                 "agrees: ratio > 2 at the shortest lag and within 50 % of 1 at the longest",
             )
         )
+    return rows
+
+
+#: The findings in the order the report lists them.
+FINDINGS = (
+    _regime_findings,
+    _trend_findings,
+    _collapse_findings,
+    _theory_findings,
+    _duration_findings,
+    _bot_msd_findings,
+    _merge_findings,
+)
+
+
+def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[Finding]:
+    """The paper's findings beside the measured values of a radius sweep's analysis."""
+    radii = np.asarray(analysis["radius"].values, dtype=float)
+    regime = np.asarray(analysis["regime"].values, dtype=int)
+    ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
+    rows: list[Finding] = []
+    for finding in FINDINGS:
+        rows += finding(analysis, free_bot, radii, regime, ratio)
     return rows

@@ -184,6 +184,61 @@ def finished(folder: Path, design: Design, seed: int) -> bool:
     return made == _manifest(design, seed) and (folder / TIMING).is_file()
 
 
+def _check_design(design: Design) -> None:
+    if design.realizations < 1 or design.free_bot_realizations < 1:
+        raise SoftcellError(
+            "a design needs at least one realization per radius and one free-bot realization"
+        )
+    if design.video is not None and design.video.radius not in design.radii:
+        raise SoftcellError(
+            f"the video's radius {design.video.radius:g} cm is not among the "
+            f"design's radii {list(design.radii)}"
+        )
+
+
+def _workers(workers: int | None, scheduler: str | None) -> int | None:
+    """The local worker processes: as given, or every core when neither they nor a scheduler
+    are given."""
+    if workers is not None and workers < 1:
+        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
+    if scheduler is None and workers is None:
+        return (
+            len(os.sched_getaffinity(0))
+            if hasattr(os, "sched_getaffinity")
+            else (os.cpu_count() or 1)
+        )
+    return workers
+
+
+def _bytes_to_write(
+    config: RunConfig,
+    folder: Path,
+    count: int,
+    membrane: bool,
+    seed: int,
+    overwrite: bool,
+    registry: Registry,
+) -> int:
+    """Bytes one ensemble will write into ``folder``, once its request is checked against
+    what the folder holds."""
+    from softcell.workflows.ensemble import plan
+    from softcell.workflows.resume import expected_bytes, resume_plan
+
+    tasks = plan(
+        config, folder, realizations=count, seed=seed, membrane=membrane, registry=registry
+    )
+    return expected_bytes(resume_plan(tasks, folder, overwrite=overwrite).todo)
+
+
+def _filmed_task(design: Design, out: Path, seed: int, registry: Registry):
+    """The realization the experimental pipeline films: realization 0 at the video's radius."""
+    from softcell.workflows.ensemble import plan
+
+    assert design.video is not None
+    tasks = plan(_config(design), out / "simulations", realizations=1, seed=seed, registry=registry)
+    return next(t for t in tasks if t.params.radius == design.video.radius)
+
+
 def reproduce(
     out: str | os.PathLike[str],
     design: Design = QUICK,
@@ -237,27 +292,11 @@ def reproduce(
     from softcell.io.files import atomic_write, check_output, check_writable
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.workflows.cluster import check_scheduler, cluster_client
-    from softcell.workflows.ensemble import plan, simulate
+    from softcell.workflows.ensemble import simulate
     from softcell.workflows.report import write_report
-    from softcell.workflows.resume import expected_bytes, resume_plan
 
-    if design.realizations < 1 or design.free_bot_realizations < 1:
-        raise SoftcellError(
-            "a design needs at least one realization per radius and one free-bot realization"
-        )
-    if design.video is not None and design.video.radius not in design.radii:
-        raise SoftcellError(
-            f"the video's radius {design.video.radius:g} cm is not among the "
-            f"design's radii {list(design.radii)}"
-        )
-    if workers is not None and workers < 1:
-        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
-    if scheduler is None and workers is None:
-        workers = (
-            len(os.sched_getaffinity(0))
-            if hasattr(os, "sched_getaffinity")
-            else os.cpu_count() or 1
-        )
+    _check_design(design)
+    workers = _workers(workers, scheduler)
     check_seed(seed)
     registry = registry if registry is not None else default_registry()
     out = check_output(out, "report", directory=True)
@@ -265,20 +304,13 @@ def reproduce(
     config = _config(design)
     free = _config(design, design.radii[0])
     # Every check before anything is computed: both ensembles' requests against the files.
-    need = 0
-    for cfg, folder, count, membrane in (
-        (config, "simulations", design.realizations, True),
-        (free, "free_bot", design.free_bot_realizations, False),
-    ):
-        tasks = plan(
-            cfg,
-            out / folder,
-            realizations=count,
-            seed=seed,
-            membrane=membrane,
-            registry=registry,
+    need = sum(
+        _bytes_to_write(cfg, out / folder, count, membrane, seed, overwrite, registry)
+        for cfg, folder, count, membrane in (
+            (config, "simulations", design.realizations, True),
+            (free, "free_bot", design.free_bot_realizations, False),
         )
-        need += expected_bytes(resume_plan(tasks, out / folder, overwrite=overwrite).todo)
+    )
     check_writable(out, need)
     if scheduler is not None:
         check_scheduler(scheduler)
@@ -343,17 +375,7 @@ def reproduce(
             f"rendering, tracking and analysing {design.video.span:g} s at "
             f"R = {design.video.radius:g} cm",
         ):
-            task = next(
-                t
-                for t in plan(
-                    _config(design),
-                    out / "simulations",
-                    realizations=1,
-                    seed=seed,
-                    registry=registry,
-                )
-                if t.params.radius == design.video.radius
-            )
+            task = _filmed_task(design, out, seed, registry)
             video = experimental_pipeline(
                 Path(task.path),
                 out / "video",

@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 from softcell.errors import SoftcellError
-from softcell.workflows.beyond import Variant, run_variants
+from softcell.io.study_figures import values_figure, verdicts_figure
 from softcell.workflows.reproduce import QUICK, Design
+from softcell.workflows.study import Variant, run_variants, table_row
 
 #: The quick design without its video: the study needs the simulations' findings only.
 BASE = replace(QUICK, video=None)
@@ -381,151 +382,12 @@ def summarize(
             json.dumps({"seed": seed, "variants": results}, indent=1) + "\n", encoding="utf-8"
         )
     figures = [
-        _values_figure(out / "figures", variants, results),
-        _verdicts_figure(out / "figures", variants, results),
+        values_figure(out / "figures", variants, results, DEFAULTS),
+        verdicts_figure(out / "figures", variants, results),
     ]
     with atomic_write(out / "sensitivity.md") as tmp:
         tmp.write_text(_markdown(variants, results, figures, seed, base), encoding="utf-8")
     return out / "sensitivity.md"
-
-
-def _groups(variants: Sequence[Variant]) -> dict[str, list[Variant]]:
-    groups: dict[str, list[Variant]] = {}
-    for v in variants[1:]:
-        groups.setdefault(v.unknown or v.name, []).append(v)
-    return groups
-
-
-#: The figure's rows: (key, axis label, log scale, offset subtracted).
-_ROWS = (
-    ("mean_go_duration", "<tau_g> (s)", False, 0.0),
-    ("gc_distance_ratio", "GC distance / R", False, 0.0),
-    ("ipr", "IPR - 2 sqrt(pi)", True, 2 * math.sqrt(math.pi)),
-    ("bot_msd_ratio", "bot MSD / free bot's", False, 0.0),
-)
-
-
-def _values_figure(
-    folder: Path, variants: Sequence[Variant], results: dict[str, dict[str, Any]]
-) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    folder.mkdir(parents=True, exist_ok=True)
-    groups = _groups(variants)
-    reference = variants[0]
-    fig, axes = plt.subplots(
-        len(_ROWS),
-        len(groups),
-        figsize=(2.9 * len(groups), 9.5),
-        sharex=True,
-        sharey="row",
-        constrained_layout=True,
-        squeeze=False,
-    )
-    for col, (unknown, members) in enumerate(groups.items()):
-        for row, (key, ylabel, log, offset) in enumerate(_ROWS):
-            ax = axes[row, col]
-            for v, style in (
-                (reference, dict(color="k", marker="o")),
-                *((m, dict(marker="s^v"[j % 3])) for j, m in enumerate(members)),
-            ):
-                r = results[v.name]
-                value = np.asarray(r[key]["value"]) - offset
-                ax.errorbar(
-                    r["radius"],
-                    value,
-                    yerr=r[key]["sem"],
-                    ms=3.5,
-                    lw=1,
-                    capsize=2,
-                    label=f"{v.label}"
-                    if v is not reference
-                    else f"default ({DEFAULTS.get(unknown, '')})",
-                    **style,
-                )
-            if key == "gc_distance_ratio":
-                for level in results[reference.name]["regime_bounds"].values():
-                    ax.axhline(level["level"], color="0.6", lw=0.8, ls="--")
-            if log:
-                ax.set_yscale("log")
-            if col == 0:
-                ax.set_ylabel(ylabel)
-            if row == len(_ROWS) - 1:
-                ax.set_xlabel("R (cm)")
-        axes[0, col].set_title(unknown, fontsize=10)
-        axes[0, col].legend(fontsize=6.5, loc="best")
-    fig.suptitle(
-        "The quick design over one unknown at a time (error bars: standard error "
-        "across realizations)",
-        fontsize=10,
-    )
-    fig.savefig(folder / "sensitivity.png", dpi=110)
-    plt.close(fig)
-    return "sensitivity.png"
-
-
-_VERDICT_CODE = {"agrees": 2, "partly": 1, "differs": 0}
-
-
-def _verdicts_figure(
-    folder: Path, variants: Sequence[Variant], results: dict[str, dict[str, Any]]
-) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
-
-    topics = list(results[variants[0].name]["verdicts"])
-    grid = np.array(
-        [
-            [_VERDICT_CODE.get(results[v.name]["verdicts"].get(t, ""), np.nan) for v in variants]
-            for t in topics
-        ],
-        dtype=float,
-    )
-    fig, ax = plt.subplots(
-        figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
-        constrained_layout=True,
-    )
-    cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
-    ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")
-    reference = grid[:, :1]
-    for (i, j), code in np.ndenumerate(grid):
-        text = (
-            {2: "agrees", 1: "partly", 0: "differs"}.get(int(code), "n/m")
-            if np.isfinite(code)
-            else "n/m"
-        )
-        flipped = (
-            j > 0 and not (np.isnan(code) and np.isnan(reference[i, 0])) and code != reference[i, 0]
-        )
-        ax.text(
-            j,
-            i,
-            text,
-            ha="center",
-            va="center",
-            fontsize=7,
-            fontweight="bold" if flipped else "normal",
-        )
-    ax.set_xticks(
-        range(len(variants)), [v.name for v in variants], rotation=40, ha="right", fontsize=8
-    )
-    ax.set_yticks(range(len(topics)), topics, fontsize=8)
-    ax.set_title(
-        "verdict per finding and variant\n(bold: not the defaults'; n/m: not measured)", fontsize=9
-    )
-    fig.savefig(folder / "verdicts.png", dpi=110)
-    plt.close(fig)
-    return "verdicts.png"
-
-
-def _row(cells) -> str:
-    return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
 def _pm(value: float, sem: float, spec: str) -> str:
@@ -534,51 +396,45 @@ def _pm(value: float, sem: float, spec: str) -> str:
     return f"{value:{spec}}" + (f" ± {sem:{spec}}" if np.isfinite(sem) else "")
 
 
-def _markdown(variants, results, figures, seed: int, base: Design) -> str:
-    from softcell._version import __version__
-
+def _findings_section(variants, results) -> list[str]:
     ref = results[variants[0].name]
-    radii = ref["radius"]
-    topics = list(ref["verdicts"])
     lines = [
-        "# What the paper's unknowns decide",
-        "",
-        f"Made by `softcell study sensitivity` (softcell {__version__}): {base.describe()}; "
-        f"one unknown moved at a time, root seed {seed} for every variant. Each variant's own "
-        "report is in its folder; the values are in `sensitivity.json`.",
-        "",
-        "Defaults: " + "; ".join(f"{k} {v}" for k, v in DEFAULTS.items()) + ".",
-        "",
         "## The findings per variant",
         "",
-        _row(["finding", *[v.name for v in variants]]),
-        _row(["---"] * (len(variants) + 1)),
+        table_row(["finding", *[v.name for v in variants]]),
+        table_row(["---"] * (len(variants) + 1)),
     ]
-    for t in topics:
+    for t in ref["verdicts"]:
         mine = ref["verdicts"][t]
         cells = [results[v.name]["verdicts"].get(t, "-") for v in variants]
-        lines.append(_row([t, mine, *[f"**{c}**" if c != mine else c for c in cells[1:]]]))
+        lines.append(table_row([t, mine, *[f"**{c}**" if c != mine else c for c in cells[1:]]]))
     agree = [sum(x == "agrees" for x in results[v.name]["verdicts"].values()) for v in variants]
     lines += [
-        _row(["findings that agree", *agree]),
+        table_row(["findings that agree", *agree]),
         "",
         "Bold: a verdict that differs from the defaults'.",
         "",
         "## Which variants flip a verdict",
         "",
-        _row(["finding", "defaults", "flipped by"]),
-        _row(["---"] * 3),
+        table_row(["finding", "defaults", "flipped by"]),
+        table_row(["---"] * 3),
     ]
     for t, who in flips(results, variants).items():
         lines.append(
-            _row([t, ref["verdicts"][t], "; ".join(f"{n}: {v}" for n, v in who.items()) or "none"])
+            table_row(
+                [t, ref["verdicts"][t], "; ".join(f"{n}: {v}" for n, v in who.items()) or "none"]
+            )
         )
-    lines += [
+    return lines
+
+
+def _facts_section(variants, results) -> list[str]:
+    lines = [
         "",
         "## The paper's stated facts per variant",
         "",
-        _row(["variant", *[label for _, label, _ in FACTS]]),
-        _row(["---"] * (1 + len(FACTS))),
+        table_row(["variant", *[label for _, label, _ in FACTS]]),
+        table_row(["---"] * (1 + len(FACTS))),
     ]
     for v in variants:
         f, kept = results[v.name]["facts"], facts_kept(results[v.name])
@@ -588,26 +444,26 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
             f["regime_at_4"],
             f["regime_at_12"],
         ]
-        lines.append(
-            _row(
-                [
-                    v.name,
-                    *[
-                        c if kept[key] else f"**{c}** (broken)"
-                        for c, (key, _, _) in zip(cells, FACTS, strict=True)
-                    ],
-                ]
-            )
-        )
+        marked = [
+            c if kept[key] else f"**{c}** (broken)"
+            for c, (key, _, _) in zip(cells, FACTS, strict=True)
+        ]
+        lines.append(table_row([v.name, *marked]))
     proposed = candidates(results, variants)
-    lines += [
+    return [
+        *lines,
         "",
         "A variant is a candidate default when it agrees with strictly more findings "
         "than the defaults, every finding the defaults agree with included, and keeps "
         "every fact above: " + (", ".join(proposed) if proposed else "none") + ".",
         "",
     ]
-    lines += [
+
+
+def _values_section(variants, results, base: Design) -> list[str]:
+    ref = results[variants[0].name]
+    radii = ref["radius"]
+    lines = [
         "## The measured values",
         "",
         f"Pooled value ± standard error across the {base.realizations} realizations "
@@ -635,37 +491,32 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
         lines += [
             f"### {title}",
             "",
-            _row(["variant", *[f"R = {r:g}" for r in radii]]),
-            _row(["---"] * (1 + len(radii))),
+            table_row(["variant", *[f"R = {r:g}" for r in radii]]),
+            table_row(["---"] * (1 + len(radii))),
         ]
         for v in variants:
             r = results[v.name][key]
-            lines.append(
-                _row(
-                    [
-                        v.name,
-                        *[
-                            _pm(x - offset, s, digits)
-                            for x, s in zip(r["value"], r["sem"], strict=True)
-                        ],
-                    ]
-                )
-            )
+            values = [_pm(x - offset, s, digits) for x, s in zip(r["value"], r["sem"], strict=True)]
+            lines.append(table_row([v.name, *values]))
         lines.append("")
-    lines += [
+    return lines
+
+
+def _bounds_section(variants, results) -> list[str]:
+    lines = [
         "### Regime boundaries (cm)",
         "",
         "Where the GC distance ratio reaches 0.35 (end of the coupled regime) and 0.5 "
         "(start of the decoupled one), interpolated between radii; the first radius when "
         "it starts above, - when it never reaches it.",
         "",
-        _row(["variant", "coupled until", "decoupled from", "regime per R"]),
-        _row(["---"] * 4),
+        table_row(["variant", "coupled until", "decoupled from", "regime per R"]),
+        table_row(["---"] * 4),
     ]
     for v in variants:
         b = results[v.name]["regime_bounds"]
         lines.append(
-            _row(
+            table_row(
                 [
                     v.name,
                     _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"], ".2f"),
@@ -674,5 +525,27 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
                 ]
             )
         )
-    lines += ["", *[f"![{f}](figures/{f})" for f in figures], ""]
+    return lines
+
+
+def _markdown(variants, results, figures, seed: int, base: Design) -> str:
+    from softcell._version import __version__
+
+    lines = [
+        "# What the paper's unknowns decide",
+        "",
+        f"Made by `softcell study sensitivity` (softcell {__version__}): {base.describe()}; "
+        f"one unknown moved at a time, root seed {seed} for every variant. Each variant's own "
+        "report is in its folder; the values are in `sensitivity.json`.",
+        "",
+        "Defaults: " + "; ".join(f"{k} {v}" for k, v in DEFAULTS.items()) + ".",
+        "",
+        *_findings_section(variants, results),
+        *_facts_section(variants, results),
+        *_values_section(variants, results, base),
+        *_bounds_section(variants, results),
+        "",
+        *[f"![{f}](figures/{f})" for f in figures],
+        "",
+    ]
     return "\n".join(lines) + "\n"

@@ -100,6 +100,19 @@ class Registry:
         self.pm.add_hookspecs(hookspecs)
         self._origins: dict[str, str] = {}
 
+        self._register_all(builtins, extra_plugins, entry_points)
+        self._warn_unmatched()
+        self.pm.check_pending()
+        self._components = self._collect()
+
+    def _register_all(
+        self,
+        builtins: tuple[str, ...],
+        extra_plugins: Iterable[tuple[str, object]],
+        entry_points: Iterable[importlib.metadata.EntryPoint] | None,
+    ) -> None:
+        """Register the built-ins, then the objects given, then the entry points, skipping
+        the blocked ones."""
         for module_name in builtins:
             short = module_name.rsplit(".", 1)[-1]
             if not self._is_disabled(short, module_name):
@@ -115,6 +128,8 @@ class Registry:
             dist = getattr(ep, "dist", None)
             if not self._is_disabled(ep.name, dist.name if dist else None):
                 self._load_entry_point(ep)
+
+    def _warn_unmatched(self) -> None:
         unmatched = sorted(d for d in self.disabled if _normal(d) not in self._blocked)
         if unmatched:
             warnings.warn(
@@ -122,10 +137,8 @@ class Registry:
                 "match no plugin (give an entry-point name, a distribution name or "
                 "a built-in's name, as `softcell plugins` shows them)",
                 PluginWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
-        self.pm.check_pending()
-        self._components = self._collect()
 
     def _is_disabled(self, *names: str | None) -> bool:
         """Whether any of a plugin's names (entry point, distribution, module) is blocked;

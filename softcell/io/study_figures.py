@@ -1,0 +1,215 @@
+"""The studies' figures: ``softcell beyond`` (static friction, the arena) and ``softcell study
+sensitivity`` (the paper's unknowns), drawn from their measured values and written atomically.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softcell.io.files import atomic_write
+
+
+def _save(fig, path: Path, dpi: int) -> None:
+    """Write ``fig`` as PNG to ``path`` atomically (a crash leaves no half figure), and close
+    it."""
+    import matplotlib.pyplot as plt
+
+    with atomic_write(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=dpi)
+    plt.close(fig)
+
+
+def friction_figures(
+    folder: Path, variants: Sequence[Any], results: dict[str, Any], free_seconds: float
+) -> list[str]:
+    """``friction.png`` (<tau_s>, <tau_g> and the shape during stops against R, per
+    variant) and ``arena.png`` (the long free-bot MSDs, open floor and arena, with the
+    confined-square formula) in ``folder``; returns their names."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
+    for v in variants:
+        r = results[v.name]
+        axes[0].plot(r["radius"], r["mean_stop_duration"], "o-", label=v.label)
+        axes[1].plot(r["radius"], r["mean_go_duration"], "o-", label=v.label)
+        axes[2].plot(r["radius"], np.array(r["ipr_excess_stop"]), "o-", label=v.label)
+    axes[0].set(xlabel="R (cm)", ylabel="<tau_s> (s)", title="mean stop duration (cell)")
+    axes[1].set(xlabel="R (cm)", ylabel="<tau_g> (s)", title="mean go duration (cell)")
+    axes[2].set(
+        xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log", title="shape excess during stops"
+    )
+    axes[0].legend(fontsize=7)
+    _save(fig, folder / "friction.png", dpi=120)
+
+    from softcell.core.analysis.fits import confined_square_msd
+
+    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    renewal = results[variants[0].name]["free_renewal_d"]
+    long = results.get("free_bot_long", {})
+    for name, r in long.items():
+        ax.loglog(r["lag"], r["msd"], label=f"free bot, {name} ({free_seconds:g} s runs)")
+    if "arena" in long:
+        lag = np.asarray(long["arena"]["lag"])
+        d = long["arena"]["confined_d"]
+        ax.loglog(
+            lag, confined_square_msd(lag, d, 100.0), "k--", label=f"confined fit, D = {d:.1f} cm2/s"
+        )
+        ax.loglog(
+            lag,
+            confined_square_msd(lag, renewal, 100.0),
+            "k:",
+            label=f"confined formula at the renewal D = {renewal:.2f}",
+        )
+        ax.axhline(100.0**2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
+    ax.set(xlabel="lag (s)", ylabel="MSD (cm2)", title="free bot: open floor and 1 m arena")
+    ax.legend(fontsize=7)
+    _save(fig, folder / "arena.png", dpi=120)
+    return ["friction.png", "arena.png"]
+
+
+def _groups(variants: Sequence[Any]) -> dict[str, list[Any]]:
+    groups: dict[str, list[Any]] = {}
+    for v in variants[1:]:
+        groups.setdefault(v.unknown or v.name, []).append(v)
+    return groups
+
+
+#: The figure's rows: (key, axis label, log scale, offset subtracted).
+_ROWS = (
+    ("mean_go_duration", "<tau_g> (s)", False, 0.0),
+    ("gc_distance_ratio", "GC distance / R", False, 0.0),
+    ("ipr", "IPR - 2 sqrt(pi)", True, 2 * math.sqrt(math.pi)),
+    ("bot_msd_ratio", "bot MSD / free bot's", False, 0.0),
+)
+
+
+def values_figure(
+    folder: Path,
+    variants: Sequence[Any],
+    results: dict[str, dict[str, Any]],
+    defaults: dict[str, str],
+) -> str:
+    """``sensitivity.png`` in ``folder``: per unknown (columns), the measured values against
+    R (cm) of every variant beside the reference's, with their standard errors; returns its
+    name."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = _groups(variants)
+    reference = variants[0]
+    fig, axes = plt.subplots(
+        len(_ROWS),
+        len(groups),
+        figsize=(2.9 * len(groups), 9.5),
+        sharex=True,
+        sharey="row",
+        constrained_layout=True,
+        squeeze=False,
+    )
+    for col, (unknown, members) in enumerate(groups.items()):
+        for row, (key, ylabel, log, offset) in enumerate(_ROWS):
+            ax = axes[row, col]
+            for v, style in (
+                (reference, dict(color="k", marker="o")),
+                *((m, dict(marker="s^v"[j % 3])) for j, m in enumerate(members)),
+            ):
+                r = results[v.name]
+                value = np.asarray(r[key]["value"]) - offset
+                ax.errorbar(
+                    r["radius"],
+                    value,
+                    yerr=r[key]["sem"],
+                    ms=3.5,
+                    lw=1,
+                    capsize=2,
+                    label=f"{v.label}"
+                    if v is not reference
+                    else f"default ({defaults.get(unknown, '')})",
+                    **style,
+                )
+            if key == "gc_distance_ratio":
+                for level in results[reference.name]["regime_bounds"].values():
+                    ax.axhline(level["level"], color="0.6", lw=0.8, ls="--")
+            if log:
+                ax.set_yscale("log")
+            if col == 0:
+                ax.set_ylabel(ylabel)
+            if row == len(_ROWS) - 1:
+                ax.set_xlabel("R (cm)")
+        axes[0, col].set_title(unknown, fontsize=10)
+        axes[0, col].legend(fontsize=6.5, loc="best")
+    fig.suptitle(
+        "The quick design over one unknown at a time (error bars: standard error "
+        "across realizations)",
+        fontsize=10,
+    )
+    _save(fig, folder / "sensitivity.png", dpi=110)
+    return "sensitivity.png"
+
+
+_VERDICT_CODE = {"agrees": 2, "partly": 1, "differs": 0}
+
+
+def verdicts_figure(
+    folder: Path, variants: Sequence[Any], results: dict[str, dict[str, Any]]
+) -> str:
+    """``verdicts.png`` in ``folder``: the verdict per finding (rows) and variant (columns);
+    returns its name."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    topics = list(results[variants[0].name]["verdicts"])
+    grid = np.array(
+        [
+            [_VERDICT_CODE.get(results[v.name]["verdicts"].get(t, ""), np.nan) for v in variants]
+            for t in topics
+        ],
+        dtype=float,
+    )
+    fig, ax = plt.subplots(
+        figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
+        constrained_layout=True,
+    )
+    cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
+    ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")
+    reference = grid[:, :1]
+    for (i, j), code in np.ndenumerate(grid):
+        text = (
+            {2: "agrees", 1: "partly", 0: "differs"}.get(int(code), "n/m")
+            if np.isfinite(code)
+            else "n/m"
+        )
+        flipped = (
+            j > 0 and not (np.isnan(code) and np.isnan(reference[i, 0])) and code != reference[i, 0]
+        )
+        ax.text(
+            j,
+            i,
+            text,
+            ha="center",
+            va="center",
+            fontsize=7,
+            fontweight="bold" if flipped else "normal",
+        )
+    ax.set_xticks(
+        range(len(variants)), [v.name for v in variants], rotation=40, ha="right", fontsize=8
+    )
+    ax.set_yticks(range(len(topics)), topics, fontsize=8)
+    ax.set_title(
+        "verdict per finding and variant\n(bold: not the defaults'; n/m: not measured)", fontsize=9
+    )
+    _save(fig, folder / "verdicts.png", dpi=110)
+    return "verdicts.png"
