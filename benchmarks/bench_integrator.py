@@ -32,8 +32,8 @@ REALIZATIONS, CORES = 25, 2
 
 def explicit_rate(radius: float) -> float:
     """Simulated seconds per wall second of explicit_euler over [0, EXPLICIT_SPAN] s."""
+    from softcell.core.components.registry import default_registry
     from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.plugin.registry import default_registry
     from softcell.core.realization import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 

@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 
 from softcell._version import __version__
 from softcell.config import use_module_store
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import Parameters
-from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ConfigError, ParameterError, SchemaError, SoftcellError
 from softcell.io.model_cache import DiskStore
 

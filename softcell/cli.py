@@ -22,7 +22,7 @@ from softcell.config import CHECKPOINT_EVERY
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
 from softcell.core.runconfig import RunConfig
 from softcell.errors import CacheWarning, PluginWarning, SchemaError, SoftcellError
-from softcell.io.config import load_config
+from softcell.io.config_file import load_config
 
 
 class _Parser(argparse.ArgumentParser):
@@ -91,7 +91,7 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
     """The parameters beyond the model's that ``components`` (kind -> name or names; None for
     every registered component) declare, by name, each with the first component declaring it
     (``"integrator 'rodas4'"``)."""
-    from softcell.core.plugin.registry import default_registry
+    from softcell.core.components.registry import default_registry
 
     registry = default_registry()
     found: dict[str, tuple[ParameterSpec, str]] = {}
@@ -121,7 +121,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
 
 
 def _cmd_plugins(args: argparse.Namespace) -> int:
-    from softcell.core.plugin.registry import KINDS, default_registry
+    from softcell.core.components.registry import KINDS, default_registry
 
     registry = default_registry()
     for kind in KINDS.values():
@@ -146,8 +146,8 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 
 
 def _cmd_params(args: argparse.Namespace) -> int:
+    from softcell.core.components.registry import default_registry
     from softcell.core.limits import check_run
-    from softcell.core.plugin.registry import default_registry
 
     registry = default_registry()
     config = _config(args).updated(components=_component_flags(args))

@@ -34,11 +34,7 @@ Testing
 
 from __future__ import annotations
 
-from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.model import Model
-from softcell.core.engine.reference import explicit_decay_rate
-from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
-from softcell.core.plugin.contracts import (
+from softcell.core.components.contracts import (
     Component,
     DrivingProtocol,
     EnergyTerm,
@@ -48,8 +44,12 @@ from softcell.core.plugin.contracts import (
     Stepper,
     StopGoDetector,
 )
-from softcell.core.plugin.hookspecs import hookimpl
-from softcell.core.plugin.registry import registered
+from softcell.core.components.hookspecs import hookimpl
+from softcell.core.components.registry import registered
+from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.model import Model
+from softcell.core.engine.reference import explicit_decay_rate
+from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
 from softcell.core.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
 from softcell.errors import CacheWarning, ContractError, ParameterError
 from softcell.plugins.explicit_euler import ExplicitEulerStepper

@@ -5,11 +5,11 @@ import pytest
 
 from softcell.cli import main
 from softcell.config import CONTACT_CUTOFF_LENGTHS
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_integrator, build_model, fd_hessian, initial_state
 from softcell.core.engine.compose import compose_bot
 from softcell.core.engine.reference import _curve
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng
 from softcell.errors import ParameterError
 from softcell.io.netcdf import read_dataset

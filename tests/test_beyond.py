@@ -25,7 +25,7 @@ def test_a_variant_changes_only_its_own_components_and_parameters():
     """Every variant is the base design with its own components and parameters over the
     defaults, and each names a component and parameters that exist (a misspelt one would be
     ignored by the study, not refused)."""
-    from softcell.core.plugin.registry import default_registry
+    from softcell.core.components.registry import default_registry
     from softcell.core.runconfig import DEFAULT_COMPONENTS
 
     registry = default_registry()

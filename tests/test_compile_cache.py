@@ -223,7 +223,7 @@ MODEL_CHILD = textwrap.dedent("""
     import json
     import numpy as np
     from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.plugin.registry import default_registry
+    from softcell.core.components.registry import default_registry
     from softcell.core.realization import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 

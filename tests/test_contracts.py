@@ -9,9 +9,9 @@ from numba import njit
 
 import softcell
 from softcell.cli import main
+from softcell.core.components.contracts import EnergyTerm
 from softcell.core.engine import build_model
 from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import EnergyTerm
 from softcell.errors import ContractError
 from softcell.plugins.run_and_tumble import RunAndTumble
 from softcell.testing import registered
@@ -128,7 +128,7 @@ ENGINE_TYPES = """
 import json
 from softcell.core.engine import build_integrator, build_model
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
+from softcell.core.components.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 
 counts = {}

@@ -587,7 +587,7 @@ def test_ctrl_c_on_two_workers_is_one_line_and_resumes(tmp_path):
 def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_path, monkeypatch):
     from test_registry import fake_entry_points
 
-    from softcell.core.plugin.registry import PluginWarning, Registry
+    from softcell.core.components.registry import PluginWarning, Registry
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken", good="good")
     # The warning names the distribution "softcell-fake": that name blocks its plugins
@@ -602,7 +602,7 @@ def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_
 def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkeypatch, capsys):
     from test_registry import fake_entry_points
 
-    from softcell.core.plugin import registry as reg
+    from softcell.core.components import registry as reg
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken")
     monkeypatch.setattr(reg, "_override", [])
@@ -684,7 +684,7 @@ requests = st.fixed_dictionaries(
     }
 )
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
-    from softcell.core.plugin.registry import default_registry
+    from softcell.core.components.registry import default_registry
     from softcell.core.runconfig import RunConfig
     from softcell.errors import SoftcellError
     from softcell.workflows.ensemble import plan

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from softcell.core.plugin import hookspecs
-from softcell.core.plugin.contracts import CONTRACTS
-from softcell.core.plugin.registry import KINDS
+from softcell.core.components import hookspecs
+from softcell.core.components.contracts import CONTRACTS
+from softcell.core.components.registry import KINDS
 
 DOC = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
 

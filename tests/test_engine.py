@@ -13,6 +13,8 @@ from numba import njit
 
 import softcell
 from softcell.cli import main
+from softcell.core.components.contracts import EnergyTerm
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import (
     SimulationError,
     build_integrator,
@@ -23,8 +25,6 @@ from softcell.core.engine import (
     total_energy,
 )
 from softcell.core.params import Parameters, ParameterSpec
-from softcell.core.plugin.contracts import EnergyTerm
-from softcell.core.plugin.registry import default_registry
 from softcell.core.runconfig import RunConfig
 from softcell.errors import ParameterError
 from softcell.testing import registered

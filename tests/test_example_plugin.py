@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_model, circle_modes, force_modes
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.testing import registered
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"

@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_integrator, build_model, circle_modes, total_energy
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.plugin import (
     MODEL_PARAMETERS,
     EnergyTerm,
@@ -26,7 +26,7 @@ from softcell.plugin import (
     hookimpl,
     registered,
 )
-from softcell.plugins.friction import coulomb_derivative, coulomb_velocity
+from softcell.plugins.friction_laws import coulomb_derivative, coulomb_velocity
 from softcell.plugins.rodas4 import pack
 from softcell.testing.compare import rodas4_jacobians
 

@@ -86,11 +86,11 @@ MODULES = sorted(PACKAGE.rglob("*.py"))
 
 #: Modules that import others by a name string, and the tuple of names they import: the
 #: checker reads those tuples and counts each name as an import.
-IMPORTS_BY_NAME = {"softcell.core.plugin.registry": "BUILTIN_PLUGINS"}
+IMPORTS_BY_NAME = {"softcell.core.components.registry": "BUILTIN_PLUGINS"}
 
 #: Arrows allowed against the layers, each for one reason: the registry registers the
 #: built-in plugins (the layer above it) through the same hooks as third-party ones.
-UPWARD = {"softcell.core.plugin.registry": {"plugins"}}
+UPWARD = {"softcell.core.components.registry": {"plugins"}}
 
 
 def _named_imports(path: Path, name: str) -> list[tuple[int, str]]:
@@ -110,7 +110,7 @@ def test_every_import_by_name_is_a_literal_the_checker_reads():
     """``importlib.import_module`` only where the checker reads what it imports (or where the
     name comes from the user: entry points, the lazy public names of the package)."""
     readers = {
-        "softcell.core.plugin.registry",  # BUILTIN_PLUGINS, and entry points
+        "softcell.core.components.registry",  # BUILTIN_PLUGINS, and entry points
         "softcell",  # _LAZY: the public functions, imported on first use
         "softcell.core.engine.compiled",  # the package of a bound kernel, to hash its files
     }
@@ -123,7 +123,7 @@ def test_every_import_by_name_is_a_literal_the_checker_reads():
     assert {
         n
         for _, n in _named_imports(
-            PACKAGE / "core/plugin/registry.py", "softcell.core.plugin.registry"
+            PACKAGE / "core/components/registry.py", "softcell.core.components.registry"
         )
     } >= {"softcell.plugins.rodas4", "softcell.plugins.bending"}
 

@@ -10,12 +10,12 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from softcell.core.analysis.msd import msd
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_model, circle_modes, force_modes, total_energy
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.kernels.ellipse import signed_distance_local
 from softcell.kernels.linalg import lu_factor, lu_solve
-from softcell.kernels.runs import phases
+from softcell.kernels.runs import run_lengths
 
 COARSE = {"cutoff": 4, "nodes": 64}
 
@@ -85,7 +85,7 @@ def test_lu_solve_against_gaussian_elimination(n, seed):
 def test_run_lengths_against_the_definition(samples):
     labels = np.array([s[0] for s in samples], dtype=np.int8)
     segment = np.cumsum([s[1] == 2 for s in samples]).astype(np.int64)  # new segments
-    start, length, value = phases(labels, segment)
+    start, length, value = run_lengths(labels, segment)
     assert list(zip(start.tolist(), length.tolist(), value.tolist(), strict=True)) == naive.phases(
         labels.tolist(), segment.tolist()
     )

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 import softcell.plugin
-from softcell.core.plugin.contracts import CONTRACTS
+from softcell.core.components.contracts import CONTRACTS
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "plugin" / "src"

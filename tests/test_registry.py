@@ -7,8 +7,8 @@ import types
 import pytest
 
 import softcell
-from softcell.core.plugin.contracts import StopGoDetector
-from softcell.core.plugin.registry import KINDS, PluginWarning, Registry, default_registry
+from softcell.core.components.contracts import StopGoDetector
+from softcell.core.components.registry import KINDS, PluginWarning, Registry, default_registry
 from softcell.errors import ConfigError, RegistryError
 from softcell.testing import registered
 
@@ -119,7 +119,7 @@ def test_plugin_registered_for_one_test():
 
 
 def test_hook_docs_mention_units():
-    from softcell.core.plugin import hookspecs
+    from softcell.core.components import hookspecs
 
     for hook in KINDS:
         doc = textwrap.dedent(getattr(hookspecs, hook).__doc__)

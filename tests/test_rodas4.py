@@ -6,6 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from softcell.core.components.contracts import EnergyTerm
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import (
     build_integrator,
     build_model,
@@ -16,8 +18,6 @@ from softcell.core.engine import (
     initial_state,
 )
 from softcell.core.params import MODEL_PARAMETERS, Parameters
-from softcell.core.plugin.contracts import EnergyTerm
-from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
@@ -138,7 +138,7 @@ class Plugin:
 
 
 def test_a_term_without_second_derivatives_uses_the_documented_fallback():
-    from softcell.core.plugin.hookspecs import hookimpl
+    from softcell.core.components.hookspecs import hookimpl
 
     Plugin.softcell_energy_terms = hookimpl(Plugin.softcell_energy_terms)
     with registered(Plugin):

@@ -15,9 +15,9 @@ from typing import Protocol
 import numpy as np
 
 from softcell.config import CHECKPOINT_EVERY
+from softcell.core.components.contracts import Stepper
 from softcell.core.engine.model import Model
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
-from softcell.core.plugin.contracts import Stepper
 from softcell.errors import Interrupted
 
 #: Samples handed to the stepper per call (progress, checks and checkpoints happen between

@@ -31,7 +31,7 @@ from softcell.core.params import suggest
 from softcell.errors import ConfigError
 
 if TYPE_CHECKING:
-    from softcell.core.plugin.registry import Registry
+    from softcell.core.components.registry import Registry
 
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],

@@ -9,7 +9,9 @@ from softcell.config import JIT
 
 
 @njit(**JIT)
-def phases(labels: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def run_lengths(
+    labels: np.ndarray, segment: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The complete phases of a label series.
 
     Parameters

@@ -1,2 +1,2 @@
 """Built-in components. Each module is a plugin registered through the same hooks as a
-third-party distribution (see :data:`softcell.core.plugin.registry.BUILTIN_PLUGINS`)."""
+third-party distribution (see :data:`softcell.core.components.registry.BUILTIN_PLUGINS`)."""

@@ -22,9 +22,9 @@ import numpy as np
 from numba import njit
 
 from softcell.config import CONTACT_CUTOFF_LENGTHS, JIT
+from softcell.core.components.contracts import EnergyTerm
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
-from softcell.core.plugin.contracts import EnergyTerm
-from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ParameterError
 
 

@@ -12,9 +12,9 @@ import numpy as np
 from numba import njit
 
 from softcell.config import JIT
+from softcell.core.components.contracts import EnergyTerm
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import MODEL_PARAMETERS
-from softcell.core.plugin.contracts import EnergyTerm
-from softcell.core.plugin.hookspecs import hookimpl
 
 
 @njit(**JIT)

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from softcell.core.engine import Model, Stepper, explicit_decay_rate, friction
+from softcell.core.components.contracts import Integrator, Schedule
+from softcell.core.components.hookspecs import hookimpl
+from softcell.core.engine import Model, Stepper, explicit_decay_rate, nonlinear_friction
 from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import MODEL_PARAMETERS
-from softcell.core.plugin.contracts import Integrator, Schedule
-from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ParameterError
 
 
@@ -30,7 +30,11 @@ class ExplicitEulerStepper(Stepper):
     """
 
     def __init__(self, model: Model, dt: float) -> None:
-        law = friction.compiled_friction(model.friction) if model.nonlinear_friction else None
+        law = (
+            nonlinear_friction.compiled_friction(model.friction)
+            if model.nonlinear_friction
+            else None
+        )
         self.segment = compile_module(
             "explicit-euler",
             template(__package__ + ".templates", "explicit_euler.py"),
@@ -47,7 +51,7 @@ class ExplicitEulerStepper(Stepper):
             + (f"; {model.friction.name}" if law else ""),
         ).segment
         self.model, self.dt = model, dt
-        self.law = friction.model_workspace(model, 2 * (2 * model.cutoff + 1) + 3)
+        self.law = nonlinear_friction.model_workspace(model, 2 * (2 * model.cutoff + 1) + 3)
 
     def start(self, modes, pose, schedule):
         return {
@@ -76,7 +80,7 @@ class ExplicitEulerStepper(Stepper):
             m.coefficients,
             m.context,
             m.drive_coefficients,
-            friction.mobility(m),
+            nonlinear_friction.mobility(m),
             m.bot_mobility,
             m.nodes,
             m.has_membrane,

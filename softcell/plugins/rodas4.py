@@ -19,6 +19,8 @@ import numpy as np
 from numba import njit
 
 from softcell.config import JIT
+from softcell.core.components.contracts import Integrator, Schedule
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import (
     Model,
     SimulationError,
@@ -26,13 +28,11 @@ from softcell.core.engine import (
     compose_hessians,
     compose_partials,
     fd_drive_jacobian,
-    friction,
+    nonlinear_friction,
 )
 from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import ParameterSpec
-from softcell.core.plugin.contracts import Integrator, Schedule
-from softcell.core.plugin.hookspecs import hookimpl
 from softcell.errors import ParameterError
 from softcell.kernels.rosenbrock import Tableau
 
@@ -222,7 +222,7 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         ynew=np.zeros(nu),
         force=np.zeros(nu),
         drag=np.zeros(3),
-        law=friction.model_workspace(model, nu),
+        law=nonlinear_friction.model_workspace(model, nu),
         bot_hpp=np.zeros((3, 3)),
     )
 
@@ -256,7 +256,8 @@ def compiled_loop(model: Model) -> tuple:
     """(rhs, jacobian, integrate) compiled for the model's terms and drive: generated modules
     from ``templates/rodas4_grid.py`` (once per group of terms) and
     ``templates/rodas4_loop.py``, cached on disk (:mod:`softcell.core.engine.compiled`), with
-    the model's friction law when it is nonlinear (:mod:`softcell.core.engine.friction`)."""
+    the model's friction law when it is nonlinear
+    (:mod:`softcell.core.engine.nonlinear_friction`)."""
     grid_source = template(__package__ + ".templates", "rodas4_grid.py")
     bindings: dict[str, object] = {}
     for suffix, group in zip("sf", groups(model), strict=True):
@@ -284,7 +285,7 @@ def compiled_loop(model: Model) -> tuple:
     bindings["drive"] = model.drive
     bindings["drive_jacobian"] = fd_drive_jacobian(model.drive)
     bindings["LAW"] = model.nonlinear_friction
-    law = friction.compiled_friction(model.friction) if model.nonlinear_friction else None
+    law = nonlinear_friction.compiled_friction(model.friction) if model.nonlinear_friction else None
     # unused (and pruned by numba) with the linear law
     bindings["friction_velocity"] = law.velocity if law else 0
     bindings["friction_jacobian"] = law.jacobian if law else 0
@@ -369,7 +370,7 @@ class Rodas4Stepper(Stepper):
             self.coefficients,
             m.context,
             m.drive_coefficients,
-            friction.mobility(m),
+            nonlinear_friction.mobility(m),
             m.bot_mobility,
             m.has_membrane,
             self.atol,

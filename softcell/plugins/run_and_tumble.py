@@ -1,4 +1,4 @@
-"""Driving protocols of docs/model.md §5: run_and_tumble, pivot_run_and_tumble, constant_push.
+"""Driving protocols of docs/model.md §5: run_and_tumble and pivot_run_and_tumble.
 
 Runs and tumbles alternate, starting with a run; each lasts an independent U[phase_min,
 phase_max] draw; a tumble turns counterclockwise or clockwise with probability 1/2. The bot
@@ -14,9 +14,9 @@ import numpy as np
 from numba import njit
 
 from softcell.config import JIT
+from softcell.core.components.contracts import DrivingProtocol, Schedule
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import MODEL_PARAMETERS as P
-from softcell.core.plugin.contracts import DrivingProtocol, Schedule
-from softcell.core.plugin.hookspecs import hookimpl
 from softcell.core.schema import PHASE_RUN as RUN
 from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 
@@ -121,23 +121,6 @@ class PivotRunAndTumble(RunAndTumble):
         return pivot_drive
 
 
-class ConstantPush(DrivingProtocol):
-    """A permanent run along the initial heading (the paper's calibration of gamma_mem)."""
-
-    name = "constant_push"
-    description = "a permanent run at force F0 along a fixed heading (calibrates gamma_mem)"
-    parameters = (P["drive_force"], P["drive_torque"])
-
-    def schedule(self, rng, duration):
-        return Schedule(np.zeros(1), np.array([RUN], dtype=np.int8), np.zeros(1))
-
-    def initial_heading(self, rng):
-        return float(rng.uniform(0.0, 2.0 * np.pi))
-
-    def drive_kernel(self):
-        return run_and_tumble_drive
-
-
 @hookimpl
 def softcell_driving_protocols() -> list[type[DrivingProtocol]]:
-    return [RunAndTumble, PivotRunAndTumble, ConstantPush]
+    return [RunAndTumble, PivotRunAndTumble]

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from softcell.core.analysis.stopgo import THRESHOLD
-from softcell.core.plugin.contracts import StopGoDetector
-from softcell.core.plugin.hookspecs import hookimpl
+from softcell.core.components.contracts import StopGoDetector
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.schema import STOPGO_UNKNOWN
 
 

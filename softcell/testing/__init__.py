@@ -7,6 +7,6 @@
   perspective, lens, shadows, sensor noise, blur, compression), to test a tracker.
 """
 
-from softcell.core.plugin.registry import registered
+from softcell.core.components.registry import registered
 
 __all__ = ["registered"]

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import (
     Model,
     Record,
@@ -18,9 +19,8 @@ from softcell.core.engine import (
     build_model,
     force_modes,
 )
-from softcell.core.engine.friction import mobility
+from softcell.core.engine.nonlinear_friction import mobility
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import run_realization
 from softcell.core.schema import PHASE_RUN as RUN
 from softcell.core.schema import PHASE_TUMBLE as TUMBLE

@@ -166,8 +166,8 @@ def _shape_by_phase(analysis) -> tuple[np.ndarray, np.ndarray]:
 def measure(folder: Path) -> dict[str, Any]:
     """The quantities the paper's static-friction and arena claims are about, from one
     variant's reproduction folder."""
+    from softcell.core.components.registry import default_registry
     from softcell.core.freebot import renewal_diffusion
-    from softcell.core.plugin.registry import default_registry
     from softcell.io.netcdf import read_dataset
 
     analysis = read_dataset(folder / "analysis.nc")

@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Any
 
 from softcell.config import CHECKPOINT_EVERY
+from softcell.core.components.registry import Registry, default_registry
 from softcell.core.limits import check_run, check_seed
 from softcell.core.params import expand_sweep
-from softcell.core.plugin.registry import Registry, default_registry
 from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
 from softcell.workflows.cluster import check_scheduler, cluster_client, run_on_cluster

@@ -37,10 +37,10 @@ from typing import TYPE_CHECKING, Any
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
 from softcell.errors import SoftcellError
-from softcell.workflows.pipeline import VideoDesign, experimental_pipeline
+from softcell.workflows.experiment import VideoDesign, experimental_pipeline
 
 if TYPE_CHECKING:
-    from softcell.core.plugin.registry import Registry
+    from softcell.core.components.registry import Registry
 
 RADII = tuple(float(r) for r in range(4, 14))
 
@@ -286,8 +286,8 @@ def reproduce(
         Paths and step timings; the report is ``out / "report.md"`` (and ``report.html``).
     """
     from softcell.core.analysis import analyze
+    from softcell.core.components.registry import default_registry
     from softcell.core.limits import check_seed
-    from softcell.core.plugin.registry import default_registry
     from softcell.io.figures import make_figures
     from softcell.io.files import atomic_write, check_output, check_writable
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset

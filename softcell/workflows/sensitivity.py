@@ -184,8 +184,8 @@ def membrane_measures(
     and the largest |L / L_eq - 1| per radius over every realization and sample, L the
     membrane's length (spectrally) and L_eq that of the force-free circle."""
     from softcell.core.analysis.series import smooth_area_perimeter
+    from softcell.core.components.registry import default_registry
     from softcell.core.engine.state import equilibrium_radius
-    from softcell.core.plugin.registry import default_registry
 
     registry = default_registry()
     ipr, deviation = [], []
@@ -225,9 +225,9 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     value; the regimes at 4 and 12 cm); and every finding's verdict and measured text.
     """
     from softcell.core.analysis.options import analysis_options
-    from softcell.core.analysis.pipeline import LagPlan
     from softcell.core.analysis.series import segments
     from softcell.core.analysis.stopgo import GO, durations
+    from softcell.core.analysis.sweep import LagPlan
     from softcell.core.schema import REGIME_NAMES
     from softcell.io.netcdf import open_dataset, read_dataset
 

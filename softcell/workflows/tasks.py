@@ -21,9 +21,9 @@ import numpy as np
 
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
+from softcell.core.components.registry import Registry, default_registry
 from softcell.core.engine import Model, Stepper, build_integrator, build_model
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import Registry, default_registry
 from softcell.core.realization import Saved, realization_rng, record_dataset, run_realization
 from softcell.errors import Interrupted, PluginWarning, SoftcellError
 from softcell.io.files import atomic_write

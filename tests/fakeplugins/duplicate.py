@@ -1,7 +1,7 @@
 """A plugin whose detector takes the name of the built-in one."""
 
 from softcell import hookimpl
-from softcell.core.plugin.contracts import StopGoDetector
+from softcell.core.components.contracts import StopGoDetector
 
 
 class Threshold(StopGoDetector):

@@ -11,8 +11,8 @@ from scipy.special import ellipe
 import softcell
 from softcell.core.analysis import analyze, fits, stopgo
 from softcell.core.analysis.msd import msd, msd_sums
-from softcell.core.analysis.pipeline import COLLAPSE_VARIANTS, _collapse
 from softcell.core.analysis.series import polygon_area_perimeter_centroid, shape_index
+from softcell.core.analysis.sweep import COLLAPSE_VARIANTS, _collapse
 from softcell.errors import SoftcellError
 from softcell.plugins.threshold import Threshold
 from softcell.testing.synthetic import stop_and_go_dataset, two_rate_times

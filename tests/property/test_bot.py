@@ -7,6 +7,7 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_integrator, build_model
 from softcell.core.freebot import (
     cycle_displacements,
@@ -15,7 +16,6 @@ from softcell.core.freebot import (
     turn_correlation,
 )
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 from softcell.kernels.ellipse import signed_distance
 

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import softcell
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_integrator, build_model, membrane_length
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 from softcell.core.realization import realization_rng, run_realization
 from softcell.core.runconfig import RunConfig
 from softcell.workflows.ensemble import simulate

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from softcell.core.components.registry import default_registry
 from softcell.core.engine import (
     build_model,
     circle_modes,
@@ -17,7 +18,6 @@ from softcell.core.engine import (
     total_energy,
 )
 from softcell.core.params import Parameters
-from softcell.core.plugin.registry import default_registry
 
 TERMS = ["bending", "tension", "contact"]
 radii = st.floats(3.5, 13.0)

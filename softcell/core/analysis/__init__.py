@@ -13,14 +13,14 @@ from typing import TYPE_CHECKING, Any
 from softcell.core.analysis import accessor as _accessor  # noqa: F401  (registers ds.softcell)
 
 if TYPE_CHECKING:
-    from softcell.core.analysis.pipeline import analyze
+    from softcell.core.analysis.sweep import analyze
 
 __all__ = ["analyze"]
 
 
 def __getattr__(name: str) -> Any:
     if name == "analyze":
-        from softcell.core.analysis.pipeline import analyze
+        from softcell.core.analysis.sweep import analyze
 
         return analyze
     raise AttributeError(f"module 'softcell.core.analysis' has no attribute {name!r}")

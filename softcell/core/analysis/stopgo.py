@@ -13,10 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from softcell.core.analysis.series import segment_index, segments
+from softcell.core.components.contracts import StopGoDetector
 from softcell.core.params import ParameterSpec
-from softcell.core.plugin.contracts import StopGoDetector
 from softcell.core.schema import GO, STOP
-from softcell.kernels.runs import phases
+from softcell.kernels.runs import run_lengths
 
 #: The paper's speed thresholds (cm/s): 0.03 for its simulations, 0.3 for its experiments.
 SIMULATION_THRESHOLD, EXPERIMENT_THRESHOLD = 0.03, 0.3
@@ -63,7 +63,7 @@ def durations(labels: np.ndarray, time: np.ndarray, only: int | None = None) -> 
     series = np.asarray(labels, dtype=np.int8).reshape(-1, time.size)
     go, stop = [], []
     for row in series:
-        start, length, value = phases(np.ascontiguousarray(row), seg)
+        start, length, value = run_lengths(np.ascontiguousarray(row), seg)
         duration = (length - 1) * intervals[seg[start]]
         if only is not None:
             duration, value = duration[seg[start] == only], value[seg[start] == only]

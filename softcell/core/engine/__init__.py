@@ -1,6 +1,7 @@
 """The engine: the compiled model of a parameter point, the state of a realization, and the
 model evaluated with numpy for checks."""
 
+from softcell.core.components.contracts import Stepper
 from softcell.core.engine.compose import (
     HESSIAN_ARGS,
     PARTIALS_ARGS,
@@ -26,7 +27,6 @@ from softcell.core.engine.state import (
     phase_at,
     sample_times,
 )
-from softcell.core.plugin.contracts import Stepper
 from softcell.errors import SimulationError
 
 __all__ = [

@@ -13,16 +13,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from softcell.core.engine.compose import compose_partials
-from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import (
+from softcell.core.components.contracts import (
     DrivingProtocol,
     EnergyTerm,
     FrictionLaw,
     Integrator,
     check_kernels,
 )
-from softcell.core.plugin.registry import Registry
+from softcell.core.components.registry import Registry
+from softcell.core.engine.compose import compose_partials
+from softcell.core.params import Parameters
 
 
 @dataclass

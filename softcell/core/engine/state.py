@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from softcell.config import BLOWUP_CHECK_POINTS, BLOWUP_LENGTH_FRACTION
+from softcell.core.components.contracts import Schedule
 from softcell.core.params import Parameters
-from softcell.core.plugin.contracts import Schedule
 from softcell.errors import SimulationError
 
 if TYPE_CHECKING:

@@ -3,7 +3,7 @@
 
 Bound: ``partials`` (the composed energy terms), ``drive`` (the protocol's kernel), ``LAW``
 (whether the friction law is nonlinear; then ``friction_velocity`` is its compiled velocity,
-from ``core/engine/templates/friction.py``, and ``mobility`` is 1), ``HAS_BOT`` (whether
+from ``core/engine/templates/friction_modes.py``, and ``mobility`` is 1), ``HAS_BOT`` (whether
 some term has an energy of the bot alone; then ``bot_forces`` is their sum) and
 ``JIT_FLAGS``.
 """

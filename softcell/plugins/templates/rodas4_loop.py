@@ -8,7 +8,7 @@ Bound: ``forces_s``, ``jacobian_s`` (the smooth terms on the coarse grid), ``for
 ``ORDER_F`` (whether each group has terms, and the highest curve derivative it needs),
 ``drive``, ``drive_jacobian``, ``LAW`` (whether the friction law is nonlinear; then
 ``friction_velocity`` and ``friction_jacobian`` are its compiled functions, from
-``core/engine/templates/friction.py``), ``HAS_BOT_S``, ``HAS_BOT_F`` (whether a group has
+``core/engine/templates/friction_modes.py``), ``HAS_BOT_S``, ``HAS_BOT_F`` (whether a group has
 energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
 their sums, from :func:`softcell.core.engine.compose.compose_bot`) and ``JIT_FLAGS``.
 """

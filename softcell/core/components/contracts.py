@@ -3,7 +3,7 @@
 Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
 ``description``, an explicit parameter declaration, and explicit methods; there is no
 ``**kwargs`` catch-all. A component class is registered through a hook of
-:mod:`softcell.core.plugin.hookspecs` and instantiated with a validated
+:mod:`softcell.core.components.hookspecs` and instantiated with a validated
 :class:`~softcell.core.params.Parameters`.
 """
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import pluggy
 
 if TYPE_CHECKING:
-    from softcell.core.plugin.contracts import (
+    from softcell.core.components.contracts import (
         DrivingProtocol,
         EnergyTerm,
         FrictionLaw,

@@ -1,15 +1,15 @@
 """A nonlinear friction law applied between the force modes and the velocity modes, compiled
-per law by :func:`softcell.core.engine.friction.compiled_friction`.
+per law by :func:`softcell.core.engine.nonlinear_friction.compiled_friction`.
 
 Bound: ``law_velocity`` (the law's velocity kernel), ``ANALYTIC`` (whether ``law_derivative``,
 the law's derivative kernel, is bound; otherwise central differences of ``law_velocity``) and
-``JIT_FLAGS``. ``lw`` is the workspace of :func:`softcell.core.engine.friction.workspace`.
+``JIT_FLAGS``. ``lw`` is the workspace of :func:`softcell.core.engine.nonlinear_friction.workspace`.
 """
 # ruff: noqa: F821 (the names above are bound by the loader)
 
 from numba import njit
 
-from softcell.kernels.friction import apply_to_rows, force_field, law_matrix, velocity_modes
+from softcell.kernels.friction_modes import apply_to_rows, force_field, law_matrix, velocity_modes
 
 
 @njit(**JIT_FLAGS)

@@ -1,5 +1,5 @@
 """The model's friction law, compiled for the integrators: the velocity modes of the force
-modes and the matching rows of the Jacobian (:mod:`softcell.kernels.friction`)."""
+modes and the matching rows of the Jacobian (:mod:`softcell.kernels.friction_modes`)."""
 
 from __future__ import annotations
 
@@ -82,14 +82,14 @@ def workspace(
 
 
 def compiled_friction(law) -> ModuleType:
-    """The module of ``templates/friction.py`` for the friction law ``law`` (a
-    :class:`~softcell.core.plugin.contracts.FrictionLaw`): ``velocity(fhat, vhat,
+    """The module of ``templates/friction_modes.py`` for the friction law ``law`` (a
+    :class:`~softcell.core.components.contracts.FrictionLaw`): ``velocity(fhat, vhat,
     lw)`` and ``jacobian(jac, lw)``, with ``lw`` from :func:`workspace`."""
     derivative = law.derivative_kernel()
     velocity = law.velocity_kernel()
     return compile_module(
         "friction",
-        template(__package__ + ".templates", "friction.py"),
+        template(__package__ + ".templates", "friction_modes.py"),
         {
             "law_velocity": velocity,
             "law_derivative": derivative if derivative is not None else velocity,

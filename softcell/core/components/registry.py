@@ -24,9 +24,9 @@ from typing import Any
 
 import pluggy
 
+from softcell.core.components import hookspecs
+from softcell.core.components.contracts import CONTRACTS, Component
 from softcell.core.params import Parameters, ParameterSpec, merge_specs, suggest
-from softcell.core.plugin import hookspecs
-from softcell.core.plugin.contracts import CONTRACTS, Component
 from softcell.errors import ConfigError, PluginWarning, RegistryError
 
 ENTRY_POINT_GROUP = "softcell"
@@ -41,7 +41,8 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.plugins.contact",
     "softcell.plugins.arena",
     "softcell.plugins.run_and_tumble",
-    "softcell.plugins.friction",
+    "softcell.plugins.constant_push",
+    "softcell.plugins.friction_laws",
     "softcell.plugins.explicit_euler",
     "softcell.plugins.rodas4",
     "softcell.plugins.threshold",

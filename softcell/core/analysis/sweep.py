@@ -29,8 +29,8 @@ from softcell.core.analysis.series import (
     shape_index,
     speed,
 )
+from softcell.core.components.registry import Registry, default_registry
 from softcell.core.params import Parameters, parameter_attrs
-from softcell.core.plugin.registry import Registry, default_registry
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
 from softcell.errors import SoftcellError
 
@@ -507,7 +507,7 @@ def analyze(
         Show a progress bar over sweep points.
     registry : Registry, optional
         Where the stop/go detector is looked up; by default the built-ins and the installed
-        plugins (:func:`~softcell.core.plugin.registry.default_registry`).
+        plugins (:func:`~softcell.core.components.registry.default_registry`).
 
     Returns
     -------

@@ -22,9 +22,9 @@ import math
 from numba import njit
 
 from softcell.config import JIT
+from softcell.core.components.contracts import FrictionLaw
+from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
-from softcell.core.plugin.contracts import FrictionLaw
-from softcell.core.plugin.hookspecs import hookimpl
 
 #: Below this |f| / eps the regularised law is evaluated by its Taylor expansion at f = 0
 #: (relative error ~ (|f| / eps)^2 there), not by a difference of two nearly equal softplus.
