@@ -121,6 +121,7 @@ def test_rodas4_jacobian_with_the_arena_matches_differences():
     assert np.abs(jac - diff).max() <= 1e-6 * np.abs(diff).max()
 
 
+@pytest.mark.slow
 def test_the_arena_keeps_the_membrane_and_the_bot_inside_over_a_long_run():
     side = 10.0  # the membrane (R = 4 cm) is pushed against the walls again and again
     model, (modes, pose) = _run(TERMS, 60.0, arena_side=side)
@@ -138,7 +139,9 @@ def test_the_arena_keeps_the_membrane_and_the_bot_inside_over_a_long_run():
     assert max(np.abs(points.real).max(), np.abs(points.imag).max()) > half - reach
 
 
-@pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
+@pytest.mark.parametrize(
+    "integrator", [pytest.param("rodas4", marks=pytest.mark.slow), "explicit_euler"]
+)
 def test_a_free_bot_stays_inside_the_walls(integrator):
     side = 8.0
     duration = 20.0 if integrator == "rodas4" else 0.5

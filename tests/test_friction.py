@@ -182,7 +182,9 @@ def test_the_derivative_matches_differences_and_the_law_dissipates(fx, fy, thres
 # -- a uniformly pushed membrane ------------------------------------------------------------
 
 
-@pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
+@pytest.mark.parametrize(
+    "integrator", [pytest.param("rodas4", marks=pytest.mark.slow), "explicit_euler"]
+)
 @pytest.mark.parametrize("ratio", [0.5, 0.9, 1.5, 3.0])
 def test_a_uniformly_pushed_membrane_moves_at_the_laws_speed(plugin, integrator, ratio):
     threshold, width = 1e-4, 1e-6
@@ -244,7 +246,11 @@ def test_the_sharp_limit_of_the_push_speed(plugin):
 
 
 @pytest.mark.parametrize(
-    "integrator, times", [("rodas4", [0.5, 1.0]), ("explicit_euler", [0.002, 0.004])]
+    "integrator, times",
+    [
+        pytest.param("rodas4", [0.5, 1.0], marks=pytest.mark.slow),
+        ("explicit_euler", [0.002, 0.004]),
+    ],
 )
 def test_zero_threshold_is_the_viscous_law_to_rounding(integrator, times):
     registry = default_registry()
@@ -295,6 +301,7 @@ def _largest_restoring_force(registry, modes):
     return float(np.abs(field).max())
 
 
+@pytest.mark.slow
 def test_a_released_ellipse_relaxes_with_viscous_friction_and_stays_with_coulomb(plugin):
     cutoff = int(_params(plugin).cutoff)
     start = _ellipse(cutoff)

@@ -83,6 +83,7 @@ def test_the_variants_move_one_unknown_each():
         variants_named(["k_0.5"])
 
 
+@pytest.mark.slow
 def test_small_study_runs_resumes_and_summarizes(tmp_path):
     out = tmp_path / "study"
     variants = variants_named(["k_0.18"])

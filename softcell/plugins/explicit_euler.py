@@ -14,7 +14,7 @@ import numpy as np
 
 from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
-from softcell.core.engine import Model, Stepper, explicit_decay_rate, nonlinear_friction
+from softcell.core.engine import Model, Stepper, explicit_decay_rate, nonlinear_friction, stubs
 from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import MODEL_PARAMETERS
@@ -42,10 +42,11 @@ class ExplicitEulerStepper(Stepper):
                 "partials": model.partials,
                 "drive": model.drive,
                 "LAW": law is not None,
-                # unused (and pruned by numba) with the linear law, or without bot energies
-                "friction_velocity": law.velocity if law else 0,
+                "friction_velocity": law.velocity if law else stubs.no_friction_velocity,
                 "HAS_BOT": bool(model.bot_terms),
-                "bot_forces": compose_bot(model.terms)[0] if model.bot_terms else 0,
+                "bot_forces": compose_bot(model.terms)[0]
+                if model.bot_terms
+                else stubs.no_bot_forces,
             },
             f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}"
             + (f"; {model.friction.name}" if law else ""),

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
-from softcell.config import JIT
 from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import (
@@ -29,72 +29,24 @@ from softcell.core.engine import (
     compose_partials,
     fd_drive_jacobian,
     nonlinear_friction,
+    stubs,
 )
 from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
-from softcell.kernels.rosenbrock import Tableau
-
-# RODAS4 in Hairer & Wanner's transformed variables: gamma, a_ij, c_ij, dense output h_ij.
-GAMMA = 0.25
-A = np.array(
-    [
-        [0.0, 0.0, 0.0, 0.0],
-        [1.544, 0.0, 0.0, 0.0],
-        [0.9466785280815826, 0.2557011698983284, 0.0, 0.0],
-        [3.314825187068521, 2.896124015972201, 0.9986419139977817, 0.0],
-        [1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950],
-    ]
+from softcell.plugins.rodas4_method import (  # shared with the template rodas4_loop.py
+    ERR_ACCEPTED,
+    H_NEXT,
+    JACOBIANS,
+    OK,
+    REJECTED,
+    RHS_CALLS,
+    RODAS4,
+    STEP_UNDERFLOW,
+    STEPS,
+    T,
 )
-C = np.array(
-    [
-        [0.0, 0.0, 0.0, 0.0, 0.0],
-        [-5.6688, 0.0, 0.0, 0.0, 0.0],
-        [-2.430093356833875, -0.2063599157091915, 0.0, 0.0, 0.0],
-        [-0.1073529058151375, -9.594562251023355, -20.47028614809616, 0.0, 0.0],
-        [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160, 0.0],
-        [
-            8.083246795921522,
-            -7.981132988064893,
-            -31.52159432874371,
-            16.31930543123136,
-            -6.058818238834054,
-        ],
-    ]
-)
-DENSE = np.array(
-    [
-        [
-            10.12623508344586,
-            -7.487995877610167,
-            -34.80091861555747,
-            -7.992771707568823,
-            1.025137723295662,
-        ],
-        [
-            -0.6762803392801253,
-            6.087714651680015,
-            16.43084320892478,
-            24.76722511418386,
-            -6.594389125716872,
-        ],
-    ]
-)
-
-#: The method as data, for the generic step of :mod:`softcell.kernels.rosenbrock`.
-RODAS4 = Tableau(GAMMA, A, C, DENSE)
-
-# Step-size control (Hairer & Wanner's RODAS defaults).
-SAFETY, SHRINK_LIMIT, GROW_LIMIT = 0.9, 0.2, 6.0
-
-#: Status codes of the compiled loop.
-OK, STEP_UNDERFLOW, SINGULAR = 0, 1, 2
-
-#: Slots of the ``clock`` state array.
-T, H_NEXT, H_ACCEPTED, ERR_ACCEPTED, T_LAST, H_LAST, REJECTED_LAST = range(7)
-#: Slots of the ``counters`` state array.
-STEPS, REJECTED, RHS_CALLS, JACOBIANS = range(4)
 
 Grid = namedtuple(
     "Grid",
@@ -227,19 +179,6 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
     )
 
 
-@njit(**JIT)
-def accumulate(g, mobility, out, drag):
-    """Add one grid's force modes to the modes' rates in ``out`` and its (2 pi / N)-weighted
-    pose derivatives to ``drag``."""
-    m = g.fhat.size
-    weight = 2.0 * math.pi / g.w.shape[1]
-    for j in range(m):
-        out[j] += mobility * g.fhat[j].real
-        out[m + j] += mobility * g.fhat[j].imag
-    for c in range(3):
-        drag[c] += weight * g.dpose[c]
-
-
 def groups(model: Model) -> tuple[list, list]:
     """The model's terms split into those evaluated on the coarse grid (``smooth``) and the
     others, each as a list of (index, term)."""
@@ -252,47 +191,82 @@ def _names(terms) -> str:
     return " + ".join(t.name for t in terms) or "none"
 
 
+class _Group(NamedTuple):
+    """What the loop template binds for one group of terms (the smooth terms on the coarse
+    grid, or the others on the N points)."""
+
+    forces: Callable[..., None]
+    jacobian: Callable[..., None]
+    has_terms: bool
+    order: int
+    has_bot: bool
+    bot_forces: Callable[..., None]
+    bot_hessians: Callable[..., None]
+
+
+def _group(terms: list, coarse: bool) -> _Group:
+    """The compiled grid module of ``templates/rodas4_grid.py`` for ``terms`` (the coarse
+    grid is always scanned; the others are unless every term has an analytic Hessian),
+    with the terms' energies of the bot alone (stubs when there are none)."""
+    grid_module = compile_module(
+        "rodas4-grid",
+        template(__package__ + ".templates", "rodas4_grid.py"),
+        {
+            "partials": compose_partials([t.partials_kernel() for t in terms]),
+            "hessian": compose_hessians(terms),
+            "SCAN": coarse or any(t.hessian_kernel() is None for t in terms),
+        },
+        _names(terms),
+    )
+    has_bot = any(t.acts_on_bot for t in terms)
+    bot_forces, bot_hessians = (
+        compose_bot(terms) if has_bot else (stubs.no_bot_forces, stubs.no_bot_hessians)
+    )
+    return _Group(
+        forces=grid_module.forces,
+        jacobian=grid_module.grid_jacobian,
+        has_terms=bool(terms),
+        order=max([t.derivative_order for t in terms], default=0),
+        has_bot=has_bot,
+        bot_forces=bot_forces,
+        bot_hessians=bot_hessians,
+    )
+
+
 def compiled_loop(model: Model) -> tuple:
     """(rhs, jacobian, integrate) compiled for the model's terms and drive: generated modules
     from ``templates/rodas4_grid.py`` (once per group of terms) and
     ``templates/rodas4_loop.py``, cached on disk (:mod:`softcell.core.engine.compiled`), with
     the model's friction law when it is nonlinear
     (:mod:`softcell.core.engine.nonlinear_friction`)."""
-    grid_source = template(__package__ + ".templates", "rodas4_grid.py")
-    bindings: dict[str, object] = {}
-    for suffix, group in zip("sf", groups(model), strict=True):
-        terms = [t for _, t in group]
-        grid_module = compile_module(
-            "rodas4-grid",
-            grid_source,
-            {
-                "partials": compose_partials([t.partials_kernel() for t in terms]),
-                "hessian": compose_hessians(terms),
-                # the coarse grid is always scanned; the others are unless every term has an
-                # analytic Hessian
-                "SCAN": suffix == "s" or any(t.hessian_kernel() is None for t in terms),
-            },
-            _names(terms),
-        )
-        bindings[f"forces_{suffix}"] = grid_module.forces
-        bindings[f"jacobian_{suffix}"] = grid_module.grid_jacobian
-        bindings[f"HAS_{suffix.upper()}"] = bool(terms)
-        bindings[f"ORDER_{suffix.upper()}"] = max([t.derivative_order for t in terms], default=0)
-        bindings[f"HAS_BOT_{suffix.upper()}"] = any(t.acts_on_bot for t in terms)
-        bindings[f"bot_forces_{suffix}"], bindings[f"bot_hessians_{suffix}"] = (
-            compose_bot(terms) if any(t.acts_on_bot for t in terms) else (0, 0)
-        )
-    bindings["drive"] = model.drive
-    bindings["drive_jacobian"] = fd_drive_jacobian(model.drive)
-    bindings["LAW"] = model.nonlinear_friction
+    smooth_terms, other_terms = ([t for _, t in group] for group in groups(model))
+    smooth = _group(smooth_terms, coarse=True)
+    other = _group(other_terms, coarse=False)
     law = nonlinear_friction.compiled_friction(model.friction) if model.nonlinear_friction else None
-    # unused (and pruned by numba) with the linear law
-    bindings["friction_velocity"] = law.velocity if law else 0
-    bindings["friction_jacobian"] = law.jacobian if law else 0
     loop = compile_module(
         "rodas4-loop",
         template(__package__ + ".templates", "rodas4_loop.py"),
-        bindings,
+        {
+            "forces_s": smooth.forces,
+            "jacobian_s": smooth.jacobian,
+            "HAS_S": smooth.has_terms,
+            "ORDER_S": smooth.order,
+            "HAS_BOT_S": smooth.has_bot,
+            "bot_forces_s": smooth.bot_forces,
+            "bot_hessians_s": smooth.bot_hessians,
+            "forces_f": other.forces,
+            "jacobian_f": other.jacobian,
+            "HAS_F": other.has_terms,
+            "ORDER_F": other.order,
+            "HAS_BOT_F": other.has_bot,
+            "bot_forces_f": other.bot_forces,
+            "bot_hessians_f": other.bot_hessians,
+            "drive": model.drive,
+            "drive_jacobian": fd_drive_jacobian(model.drive),
+            "LAW": law is not None,
+            "friction_velocity": law.velocity if law else stubs.no_friction_velocity,
+            "friction_jacobian": law.jacobian if law else stubs.no_friction_jacobian,
+        },
         f"{_names(model.terms)}; {model.protocol.name}"
         + (f"; {model.friction.name}" if law else ""),
     )

@@ -36,7 +36,7 @@ from numba.core.registry import CPUDispatcher
 
 from softcell._version import __version__
 from softcell.config import JIT, module_store
-from softcell.errors import CacheWarning, SoftcellError
+from softcell.errors import CacheWarning, ContractError, SoftcellError
 
 # numba flags of the generated functions: the kernels' own, cached on disk, or not cached
 # where an entry cannot be keyed (see :class:`NotCacheable`).
@@ -233,6 +233,43 @@ def _in_memory(label: str, source: str, bindings: Mapping[str, object]) -> types
     )
 
 
+def _declared_bindings(source: str) -> tuple[str, ...] | None:
+    """The names a template declares in its top-level ``BOUND = (...)``, or None."""
+    for node in ast.parse(source).body:
+        if (
+            isinstance(node, ast.Assign)
+            and len(node.targets) == 1
+            and isinstance(node.targets[0], ast.Name)
+            and node.targets[0].id == "BOUND"
+        ):
+            return tuple(ast.literal_eval(node.value))
+    return None
+
+
+def check_bindings(label: str, source: str, bindings: Mapping[str, object]) -> None:
+    """Raise :class:`~softcell.errors.ContractError` unless ``bindings`` are exactly the names
+    ``source`` declares in ``BOUND`` (a source that declares none is not checked); the
+    message names the template (its path) and each missing or extra name."""
+    declared = _declared_bindings(source)
+    if declared is None:
+        return
+    missing = sorted(set(declared) - set(bindings))
+    extra = sorted(set(bindings) - set(declared))
+    if missing or extra:
+        where = getattr(source, "path", f"the {label} source")
+        raise ContractError(
+            f"{where} declares BOUND = {declared}, but "
+            + "; ".join(
+                part
+                for part in (
+                    f"{', '.join(missing)} not bound" if missing else "",
+                    f"{', '.join(extra)} bound but not declared" if extra else "",
+                )
+                if part
+            )
+        )
+
+
 def compile_module(
     label: str, source: str, bindings: Mapping[str, object], description: str = ""
 ) -> types.ModuleType:
@@ -260,6 +297,7 @@ def compile_module(
         closure, a function typed in a notebook), the module is compiled in memory instead,
         with a :class:`~softcell.plugin.CacheWarning` saying why.
     """
+    check_bindings(label, source, bindings)
     try:
         key = entry_key(source, bindings)
     except NotCacheable as reason:

@@ -24,11 +24,23 @@ HESSIAN_ARGS = (
 _PREAMBLE = "from numba import njit\n\n\n"
 
 
+class Template(str):
+    """The text of a template, with ``path``: where it was read from (errors name it)."""
+
+    path: str
+
+    def __new__(cls, text: str, path: str) -> Template:
+        self = super().__new__(cls, text)
+        self.path = path
+        return self
+
+
 @functools.cache
-def template(package: str, name: str) -> str:
+def template(package: str, name: str) -> Template:
     """The text of the template ``name`` (a file of ``package``, never imported); read once
     per process."""
-    return resources.files(package).joinpath(name).read_text(encoding="utf-8")
+    resource = resources.files(package).joinpath(name)
+    return Template(resource.read_text(encoding="utf-8"), str(resource))
 
 
 def _names(kernels: Sequence[Callable[..., object]]) -> str:

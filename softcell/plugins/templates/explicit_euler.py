@@ -7,7 +7,7 @@ from ``core/engine/templates/friction_modes.py``, and ``mobility`` is 1), ``HAS_
 some term has an energy of the bot alone; then ``bot_forces`` is their sum) and
 ``JIT_FLAGS``.
 """
-# ruff: noqa: F821 (the names above are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 import math
 
@@ -15,6 +15,17 @@ import numpy as np
 from numba import njit
 
 from softcell.kernels.spectral import assemble, evaluate
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = (
+    "partials",
+    "drive",
+    "LAW",
+    "friction_velocity",
+    "HAS_BOT",
+    "bot_forces",
+)
 
 
 @njit(**JIT_FLAGS)

@@ -6,13 +6,21 @@ Bound: ``partials`` and ``hessian`` (the group's composed kernels), ``SCAN`` (bo
 do (true of the contact, which vanishes beyond its cut-off) and only those points are visited;
 otherwise (the fallback's differences, or a small grid) every point is scanned.
 """
-# ruff: noqa: F821 (partials, hessian, SCAN and JIT_FLAGS are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 from numba import njit
 from rocket_fft import c2c
 
 from softcell.kernels.jacobian import SPARSE_POINTS, active_points, assemble_jacobian
 from softcell.kernels.spectral import AXES, assemble, derivative_spectrum
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = (
+    "partials",
+    "hessian",
+    "SCAN",
+)
 
 
 @njit(**JIT_FLAGS)

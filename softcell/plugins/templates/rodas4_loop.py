@@ -12,7 +12,7 @@ Bound: ``forces_s``, ``jacobian_s`` (the smooth terms on the coarse grid), ``for
 energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
 their sums, from :func:`softcell.core.engine.compose.compose_bot`) and ``JIT_FLAGS``.
 """
-# ruff: noqa: F821 (the names above are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 import math
 
@@ -26,7 +26,7 @@ from softcell.kernels.rosenbrock import (
     factor_iteration_matrix,
     stages,
 )
-from softcell.plugins.rodas4 import (
+from softcell.plugins.rodas4_method import (
     ERR_ACCEPTED,
     GAMMA,
     GROW_LIMIT,
@@ -46,6 +46,30 @@ from softcell.plugins.rodas4 import (
     T_LAST,
     T,
     accumulate,
+)
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = (
+    "forces_s",
+    "jacobian_s",
+    "HAS_S",
+    "ORDER_S",
+    "HAS_BOT_S",
+    "bot_forces_s",
+    "bot_hessians_s",
+    "forces_f",
+    "jacobian_f",
+    "HAS_F",
+    "ORDER_F",
+    "HAS_BOT_F",
+    "bot_forces_f",
+    "bot_hessians_f",
+    "drive",
+    "drive_jacobian",
+    "LAW",
+    "friction_velocity",
+    "friction_jacobian",
 )
 
 

@@ -4,9 +4,13 @@ its kernel (see :func:`softcell.core.engine.compose.compose_bot`).
 Bound: ``bot`` (the term's bot kernel), ``JIT_FLAGS``. Steps ``steps[6:9]`` (cm, cm, rad); the
 result is *added* to ``hpp``.
 """
-# ruff: noqa: F821 (bot and JIT_FLAGS are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 from numba import njit
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = ("bot",)
 
 
 @njit(**JIT_FLAGS)

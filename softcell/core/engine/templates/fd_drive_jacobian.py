@@ -3,9 +3,13 @@ rad).
 
 Bound: ``drive`` (the protocol's drive kernel), ``JIT_FLAGS``.
 """
-# ruff: noqa: F821 (drive and JIT_FLAGS are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 from numba import njit
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = ("drive",)
 
 
 @njit(**JIT_FLAGS)

@@ -8,9 +8,13 @@ perturbation of component b at *all* points gives column b of every point's Hess
 2 x (6 + 3) kernel calls in all. Steps: ``steps[0:6]`` for w (cm), ``steps[6:9]`` for the
 pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
 """
-# ruff: noqa: F821 (partials and JIT_FLAGS are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 from numba import njit
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = ("partials",)
 
 
 @njit(**JIT_FLAGS)

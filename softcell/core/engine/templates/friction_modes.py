@@ -5,11 +5,19 @@ Bound: ``law_velocity`` (the law's velocity kernel), ``ANALYTIC`` (whether ``law
 the law's derivative kernel, is bound; otherwise central differences of ``law_velocity``) and
 ``JIT_FLAGS``. ``lw`` is the workspace of :func:`softcell.core.engine.nonlinear_friction.workspace`.
 """
-# ruff: noqa: F821 (the names above are bound by the loader)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 from numba import njit
 
 from softcell.kernels.friction_modes import apply_to_rows, force_field, law_matrix, velocity_modes
+
+#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: or an extra binding is an error naming the template.
+BOUND = (
+    "law_velocity",
+    "law_derivative",
+    "ANALYTIC",
+)
 
 
 @njit(**JIT_FLAGS)

@@ -1,0 +1,56 @@
+"""Generated code that reads as code: every template declares the names it is given, and a
+missing or extra binding is refused with the template's path."""
+
+from __future__ import annotations
+
+import ast
+import builtins
+from pathlib import Path
+
+import pytest
+
+from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.compose import template
+from softcell.errors import ContractError
+
+PACKAGE = Path(__file__).resolve().parents[1] / "softcell"
+TEMPLATES = sorted(
+    p for folder in PACKAGE.rglob("templates") for p in folder.glob("*.py") if p.stem != "__init__"
+)
+
+
+def _undefined(source: str) -> set[str]:
+    """Names the source reads but never defines (imports, defs, assignments, arguments)."""
+    tree = ast.parse(source)
+    read, defined = set(), set(dir(builtins))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            (read if isinstance(node.ctx, ast.Load) else defined).add(node.id)
+        elif isinstance(node, ast.FunctionDef | ast.ClassDef):
+            defined.add(node.name)
+        elif isinstance(node, ast.arg):
+            defined.add(node.arg)
+        elif isinstance(node, ast.alias):
+            defined.add((node.asname or node.name).split(".")[0])
+    return read - defined
+
+
+def _declared(source: str) -> set[str]:
+    for node in ast.parse(source).body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", None) == "BOUND":
+            return set(ast.literal_eval(node.value))
+    raise AssertionError("no BOUND declaration")
+
+
+@pytest.mark.parametrize("path", TEMPLATES, ids=lambda p: p.stem)
+def test_a_template_declares_exactly_the_names_it_uses_without_defining(path):
+    source = path.read_text()
+    assert _declared(source) | {"JIT_FLAGS"} == _undefined(source)
+
+
+def test_a_missing_or_an_extra_binding_names_the_template():
+    source = template("softcell.core.engine.templates", "fd_drive_jacobian.py")
+    with pytest.raises(ContractError, match=r"fd_drive_jacobian\.py .*drive not bound"):
+        compile_module("fd-drive", source, {})
+    with pytest.raises(ContractError, match=r"jacobian\.py .*SPARE bound but not declared"):
+        compile_module("fd-drive", source, {"drive": None, "SPARE": 1.0})
