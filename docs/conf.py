@@ -49,10 +49,12 @@ html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 # counts and indices, and the other types (names, paths, Datasets that carry their units in
 # attributes) have no unit. A missing unit fails the build (with -W).
 SECTIONS = ("Parameters", "Other Parameters", "Returns", "Yields", "Attributes")
-QUANTITY = re.compile(r"\b(float|complex|ndarray|array|scalar)\b")
+QUANTITY = re.compile(r"^\W*(float|complex|ndarray|array|scalar|numpy|np\.)")
+UNIT_WORD = r"(cm|cm2|cm-1|cm-2|cm/s|cm s-1|s|s-1|rad|rad/s|N|N cm|N cm2|px|Hz|B|MiB|bytes|1)"
 UNIT = re.compile(
-    r"\b(cm|cm2|cm-1|cm-2|s|s-1|rad|N|px|Hz|B|MiB|bytes|1|dimensionless|units?)\b"
-    r"|cm/s|rad/s|cm s-1|N cm|per cent|%|fraction|ratio|probabilit|multiples? of"
+    rf"\([^()]*\b{UNIT_WORD}(?![\w'])[^()]*\)|\bin {UNIT_WORD}\b"
+    r"|\bdimensionless\b|\bunits?\b|\bper cent\b|%|\bfraction\b|\bratio\b|\bmultiples? of\b"
+    r"|\bprobabilit"
 )
 
 

@@ -119,3 +119,40 @@ def test_documented_commands_parse(page, line):
         assert Path(source) not in Path(args.output).parents, (
             f"{page}: `softcell {line}` writes inside its input {source}"
         )
+
+
+def test_the_units_check_reads_the_numpydoc_sections():
+    """The docs build's check (docs/conf.py): a quantity without a unit is named, one with
+    its unit, a count and a name are not."""
+    pytest.importorskip("numpydoc")
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "docs_conf", Path(__file__).resolve().parents[1] / "docs" / "conf.py"
+    )
+    conf = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(conf)
+    doc = """Do it.
+
+    Parameters
+    ----------
+    radius : float
+        The membrane's radius.
+    speed : float
+        Threshold (cm/s).
+    nodes : int
+        Points.
+    name : str
+        A component.
+
+    Returns
+    -------
+    ndarray
+        The MSD.
+    """
+    import inspect
+
+    assert conf._units_missing(inspect.cleandoc(doc)) == [
+        "Parameters 'radius'",
+        "Returns 'ndarray'",
+    ]

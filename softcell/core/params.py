@@ -44,7 +44,8 @@ class ParameterSpec:
     kind : type
         ``float``, ``int`` or ``str``.
     minimum, maximum : float, optional
-        Bounds; ``minimum_inclusive`` / ``maximum_inclusive`` say whether they are allowed.
+        Bounds, in ``unit``; ``minimum_inclusive`` / ``maximum_inclusive`` say whether they
+        are allowed.
     choices : tuple of str, optional
         Allowed values of a ``str`` parameter.
     power_of_two : bool

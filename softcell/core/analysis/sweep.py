@@ -507,7 +507,7 @@ def analyze(
         Show a progress bar over sweep points.
     registry : Registry, optional
         Where the stop/go detector is looked up; by default the built-ins and the installed
-        plugins (:func:`~softcell.core.components.registry.default_registry`).
+        plugins (``softcell.core.components.registry.default_registry()``).
 
     Returns
     -------
