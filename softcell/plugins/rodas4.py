@@ -45,6 +45,11 @@ from softcell.plugins.rodas4_method import (  # shared with the template rodas4_
     RODAS4,
     STEP_UNDERFLOW,
     STEPS,
+    Coefficients,
+    Control,
+    LoopState,
+    PhaseTable,
+    Problem,
     T,
 )
 
@@ -305,6 +310,14 @@ class Rodas4Stepper(Stepper):
         self.rhs, self.jacobian, self.integrate = compiled_loop(model)
         self.ws = workspace(model, min(smooth_nodes, model.nodes))
         self.coefficients = group_coefficients(model)
+        self.problem = Problem(
+            self.coefficients,
+            model.context,
+            model.drive_coefficients,
+            nonlinear_friction.mobility(model),
+            model.bot_mobility,
+            model.has_membrane,
+        )
         self.atol, self.rtol, self.max_step, self.first_step = atol, rtol, max_step, first_step
 
     def start(self, modes, pose, schedule):
@@ -331,28 +344,15 @@ class Rodas4Stepper(Stepper):
         times = np.ascontiguousarray(times, dtype=np.float64)
         samples = np.empty((times.size, state["u"].size))
         status = self.integrate(
-            state["u"],
-            state["clock"],
-            state["phase_index"],
-            state["counters"],
-            state["dense"],
+            LoopState(
+                state["u"], state["clock"], state["phase_index"], state["counters"], state["dense"]
+            ),
             times,
             samples,
-            schedule.start,
-            schedule.phase,
-            schedule.data,
-            self.coefficients,
-            m.context,
-            m.drive_coefficients,
-            nonlinear_friction.mobility(m),
-            m.bot_mobility,
-            m.has_membrane,
-            self.atol,
-            self.rtol,
-            self.max_step,
-            RODAS4.a,
-            RODAS4.c,
-            RODAS4.dense,
+            PhaseTable(schedule.start, schedule.phase, schedule.data),
+            self.problem,
+            Control(self.atol, self.rtol, self.max_step),
+            Coefficients(RODAS4.a, RODAS4.c, RODAS4.dense),
             self.ws,
         )
         if status != OK:

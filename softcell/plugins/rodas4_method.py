@@ -6,6 +6,7 @@ and its template (``templates/rodas4_loop.py``) share, so that neither imports t
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -64,6 +65,58 @@ RODAS4 = Tableau(GAMMA, A, C, DENSE)
 
 # Step-size control (Hairer & Wanner's RODAS defaults).
 SAFETY, SHRINK_LIMIT, GROW_LIMIT = 0.9, 0.2, 6.0
+
+
+class Problem(NamedTuple):
+    """What the right-hand side reads besides the state: the terms' coefficient arrays (the
+    smooth group's tuple, the other group's), the context (l0, a, b in cm), the drive's
+    coefficients, the membrane's mobility (cm s^-1 per unit force mode, 1 with a nonlinear
+    friction law), the bot's mobilities (cm s^-1 N^-1, cm s^-1 N^-1, rad s^-1 (N cm)^-1) and
+    whether there is a membrane."""
+
+    coefficients: tuple
+    context: np.ndarray
+    drive_coefficients: np.ndarray
+    mobility: float
+    bot_mobility: np.ndarray
+    membrane: bool
+
+
+class LoopState(NamedTuple):
+    """The stepper's state arrays: the unknowns ``u`` (cm, rad), the ``clock`` (slots below,
+    s), the current phase's index, the ``counters`` (slots below) and the last step's
+    continuous extension ``dense``."""
+
+    u: np.ndarray
+    clock: np.ndarray
+    phase_index: np.ndarray
+    counters: np.ndarray
+    dense: np.ndarray
+
+
+class PhaseTable(NamedTuple):
+    """The protocol's schedule as arrays: phase start times (s), codes and data."""
+
+    starts: np.ndarray
+    phases: np.ndarray
+    data: np.ndarray
+
+
+class Control(NamedTuple):
+    """Step control: absolute (cm, rad) and relative tolerances, and the largest step (s)."""
+
+    atol: float
+    rtol: float
+    max_step: float
+
+
+class Coefficients(NamedTuple):
+    """The method's a_ij, c_ij and dense-output rows (Hairer & Wanner's transformed form)."""
+
+    a: np.ndarray
+    c: np.ndarray
+    dense: np.ndarray
+
 
 #: Status codes of the compiled loop.
 OK, STEP_UNDERFLOW, SINGULAR = 0, 1, 2

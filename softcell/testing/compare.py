@@ -19,7 +19,6 @@ from softcell.core.engine import (
     build_model,
     force_modes,
 )
-from softcell.core.engine.nonlinear_friction import mobility
 from softcell.core.params import Parameters
 from softcell.core.realization import run_realization
 from softcell.core.schema import PHASE_RUN as RUN
@@ -135,19 +134,7 @@ def rodas4_rhs(model: Model, stepper, u: np.ndarray, phase: int = RUN) -> np.nda
     """du/dt of rodas4's compiled right-hand side at the packed state ``u`` (cm, rad) in
     ``phase``, with the model's friction law; ``stepper`` is the model's rodas4 stepper."""
     out = np.zeros_like(u)
-    stepper.rhs(
-        u,
-        phase,
-        0.0,
-        out,
-        stepper.coefficients,
-        model.context,
-        model.drive_coefficients,
-        mobility(model),
-        model.bot_mobility,
-        True,
-        stepper.ws,
-    )
+    stepper.rhs(u, phase, 0.0, out, stepper.problem._replace(membrane=True), stepper.ws)
     return out
 
 
@@ -157,18 +144,7 @@ def rodas4_jacobians(
     """(rodas4's Jacobian at ``u``, central differences of :func:`rodas4_rhs` with ``step``
     in every unknown): the two should agree to the differences' truncation error."""
     rodas4_rhs(model, stepper, u, phase)  # the Jacobian reads what the rhs left at u
-    stepper.jacobian(
-        u,
-        phase,
-        0.0,
-        stepper.coefficients,
-        model.context,
-        model.drive_coefficients,
-        mobility(model),
-        model.bot_mobility,
-        True,
-        stepper.ws,
-    )
+    stepper.jacobian(u, phase, 0.0, stepper.problem._replace(membrane=True), stepper.ws)
     jac = stepper.ws.jac.copy()
     diff = np.zeros_like(jac)
     for j in range(u.size):

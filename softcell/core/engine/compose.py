@@ -12,14 +12,25 @@ from importlib import resources
 
 from softcell.core.engine.compiled import compile_module, compiled_function
 
+#: The arguments of a term's partials kernel (and of the composed sum).
 PARTIALS_ARGS = (
     "x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose"
 )
 
+#: The arguments of the composed second derivatives (and of the central-difference fallback).
 HESSIAN_ARGS = (
     "w, pose, context, coefficients, steps, saved, plus, minus, dplus, dminus, "
     "pose_tmp, hww, hwp, hpp"
 )
+
+
+def _term_call(kernel: str, arguments: str, i: int) -> str:
+    """The line that calls ``kernel`` with ``arguments`` (a signature's names), the
+    coefficients being term ``i``'s: ``    k0(x, ..., coefficients[0], ...)``."""
+    names = [a.strip() for a in arguments.split(",")]
+    passed = [f"coefficients[{i}]" if a == "coefficients" else a for a in names]
+    return f"    {kernel}({', '.join(passed)})"
+
 
 _PREAMBLE = "from numba import njit\n\n\n"
 
@@ -53,10 +64,7 @@ def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., No
     Its signature is that of a term kernel, except that ``coefficients`` is a tuple holding
     one coefficient array per term.
     """
-    calls = [
-        f"    k{i}({PARTIALS_ARGS.replace('coefficients', f'coefficients[{i}]')})"
-        for i in range(len(kernels))
-    ] or ["    pass"]
+    calls = [_term_call(f"k{i}", PARTIALS_ARGS, i) for i in range(len(kernels))] or ["    pass"]
     source = (
         _PREAMBLE
         + f"@njit(**JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
@@ -103,8 +111,7 @@ def compose_hessians(terms) -> Callable[..., None]:
             names.append(_names([kernel]))
         else:
             bindings[f"h{i}"] = fd_hessian(term.partials_kernel())
-            args = HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
-            lines.append(f"    h{i}({args})")
+            lines.append(_term_call(f"h{i}", HESSIAN_ARGS, i))
             names.append(f"differences of {_names([term.partials_kernel()])}")
     if len(lines) == 1:
         lines.append("    pass")
@@ -156,8 +163,7 @@ def compose_bot(terms) -> tuple[Callable[..., None], Callable[..., None]]:
                 {"bot": kernel},
                 _names([kernel]),
             )
-            args = BOT_HESSIAN_ARGS.replace("coefficients", f"coefficients[{i}]")
-            hessians.append(f"    bh{i}({args})")
+            hessians.append(_term_call(f"bh{i}", BOT_HESSIAN_ARGS, i))
         else:
             bindings[f"bh{i}"] = hessian
             hessians.append(f"    bh{i}(pose, context, coefficients[{i}], hpp)")

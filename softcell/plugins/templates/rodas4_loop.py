@@ -74,21 +74,11 @@ BOUND = (
 
 
 @njit(**JIT_FLAGS)
-def rhs(
-    u,
-    phase,
-    datum,
-    out,
-    coefficients,
-    context,
-    drive_coefficients,
-    mobility,
-    bot_mobility,
-    membrane,
-    ws,
-):
-    """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``.
-    ``coefficients``: (smooth group's, other group's)."""
+def rhs(u, phase, datum, out, problem, ws):
+    """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``. ``problem`` is
+    a :class:`~softcell.plugins.rodas4_method.Problem` (``coefficients``: the smooth group's
+    and the other group's)."""
+    coefficients, context, drive_coefficients, mobility, bot_mobility, membrane = problem
     m = ws.modes.size
     pose = u[2 * m :]
     drag = ws.drag
@@ -125,11 +115,10 @@ def rhs(
 
 
 @njit(**JIT_FLAGS)
-def jacobian(
-    u, phase, datum, coefficients, context, drive_coefficients, mobility, bot_mobility, membrane, ws
-):
+def jacobian(u, phase, datum, problem, ws):
     """The Jacobian at u into ``ws.jac``; the grids' ``w`` (and, with a nonlinear friction
     law, ``ws.law``) must hold what :func:`rhs` left there at u."""
+    coefficients, context, drive_coefficients, mobility, bot_mobility, membrane = problem
     m = ws.modes.size
     pose = u[2 * m :]
     ws.jac[:, :] = 0.0
@@ -174,58 +163,19 @@ def jacobian(
 @njit(**JIT_FLAGS)
 def stage_rhs(y, out, args):
     """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
-    (
-        phase,
-        datum,
-        coefficients,
-        context,
-        drive_coefficients,
-        mobility,
-        bot_mobility,
-        membrane,
-        ws,
-    ) = args
-    rhs(
-        y,
-        phase,
-        datum,
-        out,
-        coefficients,
-        context,
-        drive_coefficients,
-        mobility,
-        bot_mobility,
-        membrane,
-        ws,
-    )
+    phase, datum, problem, ws = args
+    rhs(y, phase, datum, out, problem, ws)
 
 
 @njit(**JIT_FLAGS)
-def advance_to(
-    u,
-    clock,
-    phase_index,
-    counters,
-    dense,
-    t_end,
-    sample,
-    starts,
-    phases,
-    data,  # noqa: C901
-    coefficients,
-    context,
-    drive_coefficients,
-    mobility,
-    bot_mobility,
-    membrane,
-    atol,
-    rtol,
-    max_step,
-    a,
-    cc,
-    hd,
-    ws,
-):
+def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws):  # noqa: C901
+    """Step until the clock reaches ``t_end`` (s), then write the state there into
+    ``sample``; returns a status code. ``state``, ``schedule``, ``problem``, ``control`` and
+    ``tableau`` are the records of :mod:`softcell.plugins.rodas4_method`."""
+    u, clock, phase_index, counters, dense = state
+    starts, phases, data = schedule
+    atol, rtol, max_step = control
+    a, cc, hd = tableau
     t = clock[T]
     p = phase_index[0]
     k = ws.k
@@ -237,31 +187,8 @@ def advance_to(
     while t < t_end - eps:
         t_switch = starts[p + 1] if p + 1 < starts.size else np.inf
         phase, datum = phases[p], data[p]
-        rhs(
-            u,
-            phase,
-            datum,
-            ws.f0,
-            coefficients,
-            context,
-            drive_coefficients,
-            mobility,
-            bot_mobility,
-            membrane,
-            ws,
-        )
-        jacobian(
-            u,
-            phase,
-            datum,
-            coefficients,
-            context,
-            drive_coefficients,
-            mobility,
-            bot_mobility,
-            membrane,
-            ws,
-        )
+        rhs(u, phase, datum, ws.f0, problem, ws)
+        jacobian(u, phase, datum, problem, ws)
         counters[RHS_CALLS] += 1
         counters[JACOBIANS] += 1
         while True:
@@ -276,17 +203,7 @@ def advance_to(
                 return SINGULAR
             stages(
                 stage_rhs,
-                (
-                    phase,
-                    datum,
-                    coefficients,
-                    context,
-                    drive_coefficients,
-                    mobility,
-                    bot_mobility,
-                    membrane,
-                    ws,
-                ),
+                (phase, datum, problem, ws),
                 u,
                 ws.f0,
                 h,
@@ -339,60 +256,12 @@ def advance_to(
 
 
 @njit(**JIT_FLAGS)
-def integrate(
-    u,
-    clock,
-    phase_index,
-    counters,
-    dense,
-    targets,
-    samples,
-    starts,
-    phases,
-    data,
-    coefficients,
-    context,
-    drive_coefficients,
-    mobility,
-    bot_mobility,
-    membrane,
-    atol,
-    rtol,
-    max_step,
-    a,
-    cc,
-    hd,
-    ws,
-):
+def integrate(state, targets, samples, schedule, problem, control, tableau, ws):
     """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
     write the state there into the matching row of ``samples`` from the last step's
     continuous extension. Returns a status code."""
     for r in range(targets.size):
-        status = advance_to(
-            u,
-            clock,
-            phase_index,
-            counters,
-            dense,
-            targets[r],
-            samples[r],
-            starts,
-            phases,
-            data,
-            coefficients,
-            context,
-            drive_coefficients,
-            mobility,
-            bot_mobility,
-            membrane,
-            atol,
-            rtol,
-            max_step,
-            a,
-            cc,
-            hd,
-            ws,
-        )
+        status = advance_to(state, targets[r], samples[r], schedule, problem, control, tableau, ws)
         if status != OK:
             return status
     return OK
