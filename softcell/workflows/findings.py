@@ -4,6 +4,7 @@ numbers, with the rule the verdict follows (:func:`findings`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
@@ -60,6 +61,17 @@ def _trend_finding(
     )
 
 
+class _Sweep(NamedTuple):
+    """What every finding reads: the analysis of a radius sweep, the free bot's (or None),
+    the radii (cm), the regime code and the bot-cell GC distance / R per radius."""
+
+    analysis: xr.Dataset
+    free_bot: xr.Dataset | None
+    radii: np.ndarray
+    regime: np.ndarray
+    ratio: np.ndarray
+
+
 def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
     small = [regime[i] for i, r in enumerate(radii) if r in (4.0, 5.0)]
     large = [regime[i] for i, r in enumerate(radii) if r >= 12.0]
@@ -73,14 +85,9 @@ def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
     return "differs"
 
 
-def _regime_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _regime_findings(sweep: _Sweep) -> list[Finding]:
     """The regime per radius."""
+    radii, regime, ratio = sweep.radii, sweep.regime, sweep.ratio
     rows: list[Finding] = []
     names = ", ".join(
         f"{r:g}: {REGIME_NAMES[g]} ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)
@@ -99,14 +106,9 @@ def _regime_findings(
     return rows
 
 
-def _trend_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _trend_findings(sweep: _Sweep) -> list[Finding]:
     """<tau_s>, <tau_g>, the ballistic velocity and D hat against R."""
+    analysis, radii, regime = sweep.analysis, sweep.radii, sweep.regime
     rows: list[Finding] = []
     rows.append(
         _trend_finding(
@@ -166,14 +168,9 @@ def _trend_findings(
     return rows
 
 
-def _collapse_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _collapse_findings(sweep: _Sweep) -> list[Finding]:
     """The scaling collapse of the decoupled radii."""
+    analysis = sweep.analysis
     rows: list[Finding] = []
     if "collapse_metric" in analysis:
         metric = np.asarray(analysis["collapse_metric"].values, dtype=float)
@@ -205,14 +202,9 @@ def _collapse_findings(
     return rows
 
 
-def _theory_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _theory_findings(sweep: _Sweep) -> list[Finding]:
     """The theory's v0 hat and D hat against the fits."""
+    analysis, radii = sweep.analysis, sweep.radii
     rows: list[Finding] = []
     fit, theory = cell_values(analysis, "ballistic_velocity"), cell_values(analysis, "v0_hat")
     dev = np.abs(fit / theory - 1)
@@ -242,14 +234,9 @@ def _theory_findings(
     return rows
 
 
-def _duration_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _duration_findings(sweep: _Sweep) -> list[Finding]:
     """The stop and go durations' distributions."""
+    analysis = sweep.analysis
     rows: list[Finding] = []
     ks_go, ks_stop = (
         cell_values(analysis, "go_ks_statistic"),
@@ -269,14 +256,9 @@ def _duration_findings(
     return rows
 
 
-def _bot_msd_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _bot_msd_findings(sweep: _Sweep) -> list[Finding]:
     """The bot's MSD inside the membrane against the free bot's."""
+    analysis, free_bot = sweep.analysis, sweep.free_bot
     rows: list[Finding] = []
     if free_bot is not None:
         lag = analysis["lag"].values
@@ -302,14 +284,9 @@ def _bot_msd_findings(
     return rows
 
 
-def _merge_findings(
-    analysis: xr.Dataset,
-    free_bot: xr.Dataset | None,
-    radii: np.ndarray,
-    regime: np.ndarray,
-    ratio: np.ndarray,
-) -> list[Finding]:
+def _merge_findings(sweep: _Sweep) -> list[Finding]:
     """The bot's and the cell's MSD at R = 12 cm."""
+    analysis, radii = sweep.analysis, sweep.radii
     rows: list[Finding] = []
     i12 = np.flatnonzero(radii == 12.0)
     if i12.size:
@@ -348,7 +325,5 @@ def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[F
     radii = np.asarray(analysis["radius"].values, dtype=float)
     regime = np.asarray(analysis["regime"].values, dtype=int)
     ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
-    rows: list[Finding] = []
-    for finding in FINDINGS:
-        rows += finding(analysis, free_bot, radii, regime, ratio)
-    return rows
+    sweep = _Sweep(analysis, free_bot, radii, regime, ratio)
+    return [row for finding in FINDINGS for row in finding(sweep)]
