@@ -54,3 +54,25 @@ def test_a_missing_or_an_extra_binding_names_the_template():
         compile_module("fd-drive", source, {})
     with pytest.raises(ContractError, match=r"jacobian\.py .*SPARE bound but not declared"):
         compile_module("fd-drive", source, {"drive": None, "SPARE": 1.0})
+
+
+def test_a_traceback_into_a_compiled_template_has_the_templates_line(tmp_path, monkeypatch):
+    """The cached copy holds the template line for line, and its last line names the
+    template: a traceback's line number is the template's own."""
+    import traceback
+
+    from softcell.core.engine.compose import Template
+    from softcell.io import model_cache
+
+    monkeypatch.setenv(model_cache.CACHE_ENV, str(tmp_path / "cache"))
+    text = '"""A probe."""\n\nBOUND = ("LIMIT",)\n\n\ndef check(x):\n    if x > LIMIT:\n'
+    text += '        raise ValueError("too large")\n'
+    source = Template(text, "/somewhere/templates/probe.py")
+    module = compile_module("probe", source, {"LIMIT": 1.0})
+    with pytest.raises(ValueError) as info:
+        module.check(2.0)
+    frame = traceback.extract_tb(info.tb)[-1]
+    assert frame.lineno == 8 and frame.line == 'raise ValueError("too large")'
+    stored = Path(frame.filename).read_text().splitlines()
+    assert stored[:8] == text.splitlines()
+    assert stored[-1].startswith("# softcell compiled model from /somewhere/templates/probe.py")

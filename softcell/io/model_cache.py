@@ -4,7 +4,7 @@
 this module keeps that source on disk, one directory per *entry*, so that numba caches the
 compiled functions beside it like those of any other module::
 
-    <cache>/<label>-<key>/model.py        the generated source, under a checksum header
+    <cache>/<label>-<key>/model.py        the generated source, then its origin and checksum
     <cache>/<label>-<key>/entry.json      what it is for (label, components, versions)
     <cache>/<label>-<key>/__pycache__/    numba's own cache files of its functions
 
@@ -38,7 +38,9 @@ CACHE_ENV = "SOFTCELL_CACHE_DIR"
 #: Name of the generated source in each entry.
 SOURCE = "model.py"
 
-_HEADER = "# softcell compiled model; sha256 of the lines below: "
+#: The last line of a stored source: where it came from and the checksum of the lines above.
+#: The lines above are the source itself, so a traceback's line number is the template's.
+_TRAILER = "# softcell compiled model from "
 
 
 def cache_dir() -> Path:
@@ -74,14 +76,32 @@ def _write(path: Path, text: str) -> None:
         tmp.write_text(text, encoding="utf-8")
 
 
+def _normal(source: str) -> str:
+    return source if source.endswith("\n") else source + "\n"
+
+
+def _stored_text(source: str) -> str:
+    """What an entry's source file holds: the source, then a line naming its origin (a
+    template's path) and the sha256 of the lines above."""
+    body = _normal(source)
+    origin = getattr(source, "path", "generated source")
+    digest = hashlib.sha256(body.encode()).hexdigest()
+    return f"{body}{_TRAILER}{origin}; sha256 of the lines above: {digest}\n"
+
+
 def _checked_source(path: Path) -> str | None:
-    """The body of a generated module whose header matches it, else None."""
+    """The source of a stored module whose last line matches it, else None."""
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError):
         return None
-    first, _, body = text.partition("\n")
-    if first != _HEADER + hashlib.sha256(body.encode()).hexdigest():
+    if not text.endswith("\n"):
+        return None
+    head, _, last = text[:-1].rpartition("\n")
+    body = head + "\n"
+    if not last.startswith(_TRAILER) or not last.endswith(
+        hashlib.sha256(body.encode()).hexdigest()
+    ):
         return None
     return body
 
@@ -117,7 +137,7 @@ def _entry_problem(folder: Path, source: str) -> str | None:
     body = _checked_source(path)
     if body is None and not path.exists():
         return None
-    if body != source:
+    if body != _normal(source):
         return f"{SOURCE} does not match its checksum"
     return _numba_files_ok(folder / "__pycache__")
 
@@ -159,7 +179,7 @@ class DiskStore:
         folder.mkdir(parents=True, exist_ok=True)
         if not path.exists():
             _write(folder / "entry.json", json.dumps(_meta(label, description), indent=1) + "\n")
-            _write(path, _HEADER + hashlib.sha256(source.encode()).hexdigest() + "\n" + source)
+            _write(path, _stored_text(source))
         return str(path)
 
 

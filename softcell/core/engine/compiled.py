@@ -214,9 +214,9 @@ def _execute(
     module.__file__ = filename
     module.__dict__.update(bindings)
     module.__dict__["JIT_FLAGS"] = dict(flags)
-    # The header line shifts the body by one line, so that tracebacks and numba's
-    # per-function cache names match the file.
-    code = compile("\n" + source, filename, "exec")
+    # The stored file holds the source line for line (its origin and checksum follow it), so
+    # tracebacks name the template's own line numbers.
+    code = compile(source, filename, "exec")
     sys.modules[name] = module
     exec(code, module.__dict__)
     return module
