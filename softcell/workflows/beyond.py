@@ -28,9 +28,10 @@ import numpy as np
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS
 from softcell.io.study_figures import friction_figures
+from softcell.workflows.document import Block, markdown
 from softcell.workflows.findings import cell_values
 from softcell.workflows.reproduce import QUICK, Design
-from softcell.workflows.study import Variant, run_variants, table_row
+from softcell.workflows.study import Variant, run_variants
 
 
 def _coulomb(threshold: float) -> Variant:
@@ -251,110 +252,104 @@ def _fmt(values, digits=3) -> str:
     return ", ".join(f"{v:.{digits}g}" for v in values)
 
 
-def _markdown(variants, results, figures) -> str:
-    from softcell._version import __version__
-
+def _verdict_blocks(variants, results) -> list[Block]:
     base = results[variants[0].name]
-    radii = base["radius"]
-    lines = [
-        "# Beyond the paper: static friction and the arena",
-        "",
-        f"Made by `softcell beyond` (softcell {__version__}): the quick design (every radius, "
-        "5 realizations of 240 s, root seed 0 for every variant) with each variant below. "
-        "Each variant's own report is in its folder.",
-        "",
-        "## The paper's findings, per variant",
-        "",
-        table_row(["finding", *[v.label for v in variants]]),
-        table_row(["---"] * (len(variants) + 1)),
+    rows = [
+        [name, *[results[v.name]["verdicts"].get(name, "-") for v in variants]]
+        for name in base["verdicts"]
     ]
-    for name in base["verdicts"]:
-        lines.append(
-            table_row([name, *[results[v.name]["verdicts"].get(name, "-") for v in variants]])
-        )
-    lines += [
-        "",
-        "## What static friction is claimed to do",
-        "",
-        f"Radii: {_fmt(radii)} cm.",
-        "",
-        table_row(
-            ["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops", "IPR excess, goes"]
-        ),
-        table_row(["---"] * 5),
+    return [
+        Block("h2", "The paper's findings, per variant"),
+        Block("table", (["finding", *[v.label for v in variants]], rows)),
     ]
-    for v in variants:
-        r = results[v.name]
-        lines.append(
-            table_row(
-                [
-                    v.label,
-                    _fmt(r["mean_stop_duration"]),
-                    _fmt(r["mean_go_duration"]),
-                    _fmt(r["ipr_excess_stop"], 2),
-                    _fmt(r["ipr_excess_go"], 2),
-                ]
-            )
-        )
-    lines += [
-        "",
-        "Against the paper's model (ratios to `viscous`, same seed):",
-        "",
-        table_row(
-            [
-                "variant",
-                "IPR excess during stops (median over R)",
-                "<tau_s> at R >= 10 cm (mean)",
-                "<tau_g> (median over R)",
-            ]
-        ),
-        table_row(["---"] * 4),
+
+
+def _friction_blocks(variants, results, figures) -> list[Block]:
+    base = results[variants[0].name]
+    values = [
+        [
+            v.label,
+            _fmt(results[v.name]["mean_stop_duration"]),
+            _fmt(results[v.name]["mean_go_duration"]),
+            _fmt(results[v.name]["ipr_excess_stop"], 2),
+            _fmt(results[v.name]["ipr_excess_go"], 2),
+        ]
+        for v in variants
     ]
+    ratios = []
     for v in variants[1:]:
         c = claims(base, results[v.name])
-        lines.append(
-            table_row(
-                [v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}", f"{c['go']:.3g}"]
-            )
+        ratios.append(
+            [v.label, f"{c['stop_shape']:.3g}", f"{c['stop_large']:.3g}", f"{c['go']:.3g}"]
         )
-    lines += [
-        "",
-        "The paper's claims, read from these columns: static friction keeps the shape "
-        "during stops (first column > 1), lengthens <tau_s> at large R (second > 1) and "
-        "shortens the go phases (third < 1).",
-        "",
-        *[f"![{f}](figures/{f})" for f in figures],
-        "",
+    header = ["variant", "<tau_s> (s)", "<tau_g> (s)", "IPR excess, stops", "IPR excess, goes"]
+    return [
+        Block("h2", "What static friction is claimed to do"),
+        Block("p", f"Radii: {_fmt(base['radius'])} cm."),
+        Block("table", (header, values)),
+        Block("p", "Against the paper's model (ratios to `viscous`, same seed):"),
+        Block(
+            "table",
+            (
+                [
+                    "variant",
+                    "IPR excess during stops (median over R)",
+                    "<tau_s> at R >= 10 cm (mean)",
+                    "<tau_g> (median over R)",
+                ],
+                ratios,
+            ),
+        ),
+        Block(
+            "p",
+            "The paper's claims, read from these columns: static friction keeps the shape "
+            "during stops (first column > 1), lengthens <tau_s> at large R (second > 1) and "
+            "shortens the go phases (third < 1).",
+        ),
+        Block("images", [(f, f"figures/{f}") for f in figures]),
     ]
+
+
+def _arena_blocks(results, renewal: float) -> list[Block]:
     long = results.get("free_bot_long", {})
-    if long:
-        renewal = base["free_renewal_d"]
-        lines += [
-            "## The free bot in the arena",
-            "",
+    if not long:
+        return []
+    rows = [
+        [
+            name,
+            f"{r['confined_d']:.2f}",
+            f"{r['confined_d'] / renewal:.2f}",
+            f"{r['msd'][-1]:.0f}",
+        ]
+        for name, r in long.items()
+    ]
+    header = ["floor", "confined-fit D (cm2/s)", "fit / renewal", "MSD at the longest lag (cm2)"]
+    return [
+        Block("h2", "The free bot in the arena"),
+        Block(
+            "p",
             f"{FREE_LONG[0]} realizations of {FREE_LONG[1]:g} s of the free bot (rotation "
             f"about its centre), whose renewal D is {renewal:.2f} cm2/s; the "
             "confined-square formula (L = 100 cm) fitted to its MSD:",
-            "",
-            table_row(
-                ["floor", "confined-fit D (cm2/s)", "fit / renewal", "MSD at the longest lag (cm2)"]
-            ),
-            table_row(["---"] * 4),
-        ]
-        for name, r in long.items():
-            lines.append(
-                table_row(
-                    [
-                        name,
-                        f"{r['confined_d']:.2f}",
-                        f"{r['confined_d'] / renewal:.2f}",
-                        f"{r['msd'][-1]:.0f}",
-                    ]
-                )
-            )
-        lines += [
-            "",
-            f"L^2 / 3 = {100.0**2 / 3:.0f} cm2 is where the MSD saturates in the arena.",
-            "",
-        ]
-    return "\n".join(lines) + "\n"
+        ),
+        Block("table", (header, rows)),
+        Block("p", f"L^2 / 3 = {100.0**2 / 3:.0f} cm2 is where the MSD saturates in the arena."),
+    ]
+
+
+def _markdown(variants, results, figures) -> str:
+    from softcell._version import __version__
+
+    blocks = [
+        Block("h1", "Beyond the paper: static friction and the arena"),
+        Block(
+            "p",
+            f"Made by `softcell beyond` (softcell {__version__}): the quick design (every "
+            "radius, 5 realizations of 240 s, root seed 0 for every variant) with each variant "
+            "below. Each variant's own report is in its folder.",
+        ),
+        *_verdict_blocks(variants, results),
+        *_friction_blocks(variants, results, figures),
+        *_arena_blocks(results, results[variants[0].name]["free_renewal_d"]),
+    ]
+    return markdown(blocks) + "\n"

@@ -8,12 +8,11 @@ beyond its own). The findings of the paper beside ours come from
 
 from __future__ import annotations
 
-import html
 import json
 import os
 import platform
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -24,95 +23,8 @@ import xarray as xr
 from softcell._version import __version__
 from softcell.core.schema import REGIME_NAMES
 from softcell.io.files import atomic_files
+from softcell.workflows.document import Block, html_page, markdown
 from softcell.workflows.findings import findings
-
-# ---------------------------------------------------------------------------------------------
-# A tiny document model, rendered as Markdown and as HTML
-# ---------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Block:
-    kind: str  # h1, h2, p, table, figure, code, list
-    content: Any
-
-
-def _markdown(blocks: Sequence[Block]) -> str:
-    lines: list[str] = []
-    for b in blocks:
-        if b.kind == "h1":
-            lines += [f"# {b.content}", ""]
-        elif b.kind == "h2":
-            lines += [f"## {b.content}", ""]
-        elif b.kind == "p":
-            lines += [b.content, ""]
-        elif b.kind == "list":
-            lines += [f"- {item}" for item in b.content] + [""]
-        elif b.kind == "code":
-            lines += ["```", b.content, "```", ""]
-        elif b.kind == "table":
-            header, rows = b.content
-            cells = [[str(c).replace("|", "\\|") for c in row] for row in [header, *rows]]
-            lines += [
-                "| " + " | ".join(cells[0]) + " |",
-                "| " + " | ".join("---" for _ in header) + " |",
-            ]
-            lines += ["| " + " | ".join(row) + " |" for row in cells[1:]] + [""]
-        elif b.kind == "figure":
-            png, pdf, caption = b.content
-            lines += [f"![{Path(png).stem}]({png})", "", f"*{caption}* ([PDF]({pdf}))", ""]
-    return "\n".join(lines)
-
-
-_CSS = (
-    "body{font-family:sans-serif;max-width:72em;margin:2em auto;padding:0 1em;"
-    "line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
-    "#bbb;padding:.25em .5em;vertical-align:top;text-align:left}th{background:#eee}"
-    "img{max-width:100%}figure{margin:1.5em 0}pre{background:#f4f4f4;padding:.5em;"
-    "overflow-x:auto}.agrees{color:#1b5e20}.differs{color:#b71c1c}.partly{color:#e65100}"
-)
-
-
-def _html(blocks: Sequence[Block], title: str) -> str:
-    e = html.escape
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8">',
-        f"<title>{e(title)}</title><style>{_CSS}</style></head><body>",
-    ]
-    for b in blocks:
-        if b.kind in ("h1", "h2"):
-            parts.append(f"<{b.kind}>{e(b.content)}</{b.kind}>")
-        elif b.kind == "p":
-            parts.append(f"<p>{e(b.content)}</p>")
-        elif b.kind == "list":
-            parts.append("<ul>" + "".join(f"<li>{e(i)}</li>" for i in b.content) + "</ul>")
-        elif b.kind == "code":
-            parts.append(f"<pre><code>{e(b.content)}</code></pre>")
-        elif b.kind == "table":
-            header, rows = b.content
-            head = "".join(f"<th>{e(str(c))}</th>" for c in header)
-            body = "".join(
-                "<tr>"
-                + "".join(
-                    f'<td class="{e(str(c))}">{e(str(c))}</td>'
-                    if str(c) in ("agrees", "differs", "partly")
-                    else f"<td>{e(str(c))}</td>"
-                    for c in row
-                )
-                + "</tr>"
-                for row in rows
-            )
-            parts.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
-        elif b.kind == "figure":
-            png, pdf, caption = b.content
-            parts.append(
-                f'<figure><img src="{e(png)}" alt="{e(caption)}"><figcaption>'
-                f'{e(caption)} (<a href="{e(pdf)}">PDF</a>)</figcaption></figure>'
-            )
-    parts.append("</body></html>")
-    return "\n".join(parts)
-
 
 # ---------------------------------------------------------------------------------------------
 # The report
@@ -332,8 +244,8 @@ def write_report(
     )
     with atomic_files() as staging:
         for path, text in (
-            (md, _markdown(blocks)),
-            (page, _html(blocks, title)),
+            (md, markdown(blocks)),
+            (page, html_page(blocks, title)),
             (out / "findings.json", summary),
         ):
             staging.path(path).write_text(text, encoding="utf-8")

@@ -30,8 +30,9 @@ import numpy as np
 
 from softcell.errors import SoftcellError
 from softcell.io.study_figures import values_figure, verdicts_figure
+from softcell.workflows.document import Block, markdown
 from softcell.workflows.reproduce import QUICK, Design
-from softcell.workflows.study import Variant, run_variants, table_row
+from softcell.workflows.study import Variant, run_variants
 
 #: The quick design without its video: the study needs the simulations' findings only.
 BASE = replace(QUICK, video=None)
@@ -396,46 +397,30 @@ def _pm(value: float, sem: float, spec: str) -> str:
     return f"{value:{spec}}" + (f" ± {sem:{spec}}" if np.isfinite(sem) else "")
 
 
-def _findings_section(variants, results) -> list[str]:
+def _findings_section(variants, results) -> list[Block]:
     ref = results[variants[0].name]
-    lines = [
-        "## The findings per variant",
-        "",
-        table_row(["finding", *[v.name for v in variants]]),
-        table_row(["---"] * (len(variants) + 1)),
-    ]
+    rows = []
     for t in ref["verdicts"]:
         mine = ref["verdicts"][t]
         cells = [results[v.name]["verdicts"].get(t, "-") for v in variants]
-        lines.append(table_row([t, mine, *[f"**{c}**" if c != mine else c for c in cells[1:]]]))
+        rows.append([t, mine, *[f"**{c}**" if c != mine else c for c in cells[1:]]])
     agree = [sum(x == "agrees" for x in results[v.name]["verdicts"].values()) for v in variants]
-    lines += [
-        table_row(["findings that agree", *agree]),
-        "",
-        "Bold: a verdict that differs from the defaults'.",
-        "",
-        "## Which variants flip a verdict",
-        "",
-        table_row(["finding", "defaults", "flipped by"]),
-        table_row(["---"] * 3),
+    rows.append(["findings that agree", *agree])
+    flipped = [
+        [t, ref["verdicts"][t], "; ".join(f"{n}: {v}" for n, v in who.items()) or "none"]
+        for t, who in flips(results, variants).items()
     ]
-    for t, who in flips(results, variants).items():
-        lines.append(
-            table_row(
-                [t, ref["verdicts"][t], "; ".join(f"{n}: {v}" for n, v in who.items()) or "none"]
-            )
-        )
-    return lines
+    return [
+        Block("h2", "The findings per variant"),
+        Block("table", (["finding", *[v.name for v in variants]], rows)),
+        Block("p", "Bold: a verdict that differs from the defaults'."),
+        Block("h2", "Which variants flip a verdict"),
+        Block("table", (["finding", "defaults", "flipped by"], flipped)),
+    ]
 
 
-def _facts_section(variants, results) -> list[str]:
-    lines = [
-        "",
-        "## The paper's stated facts per variant",
-        "",
-        table_row(["variant", *[label for _, label, _ in FACTS]]),
-        table_row(["---"] * (1 + len(FACTS))),
-    ]
+def _facts_section(variants, results) -> list[Block]:
+    rows = []
     for v in variants:
         f, kept = results[v.name]["facts"], facts_kept(results[v.name])
         cells = [
@@ -448,28 +433,31 @@ def _facts_section(variants, results) -> list[str]:
             c if kept[key] else f"**{c}** (broken)"
             for c, (key, _, _) in zip(cells, FACTS, strict=True)
         ]
-        lines.append(table_row([v.name, *marked]))
+        rows.append([v.name, *marked])
     proposed = candidates(results, variants)
     return [
-        *lines,
-        "",
-        "A variant is a candidate default when it agrees with strictly more findings "
-        "than the defaults, every finding the defaults agree with included, and keeps "
-        "every fact above: " + (", ".join(proposed) if proposed else "none") + ".",
-        "",
+        Block("h2", "The paper's stated facts per variant"),
+        Block("table", (["variant", *[label for _, label, _ in FACTS]], rows)),
+        Block(
+            "p",
+            "A variant is a candidate default when it agrees with strictly more findings "
+            "than the defaults, every finding the defaults agree with included, and keeps "
+            "every fact above: " + (", ".join(proposed) if proposed else "none") + ".",
+        ),
     ]
 
 
-def _values_section(variants, results, base: Design) -> list[str]:
+def _values_section(variants, results, base: Design) -> list[Block]:
     ref = results[variants[0].name]
     radii = ref["radius"]
-    lines = [
-        "## The measured values",
-        "",
-        f"Pooled value ± standard error across the {base.realizations} realizations "
-        "(common random numbers: "
-        "a difference between variants is smaller than the error bars suggest).",
-        "",
+    blocks = [
+        Block("h2", "The measured values"),
+        Block(
+            "p",
+            f"Pooled value ± standard error across the {base.realizations} realizations "
+            "(common random numbers: "
+            "a difference between variants is smaller than the error bars suggest).",
+        ),
     ]
     tables = (
         ("mean_go_duration", "<tau_g> of the cell (s)", ".3f", 0.0),
@@ -488,64 +476,58 @@ def _values_section(variants, results, base: Design) -> list[str]:
         ),
     )
     for key, title, digits, offset in tables:
-        lines += [
-            f"### {title}",
-            "",
-            table_row(["variant", *[f"R = {r:g}" for r in radii]]),
-            table_row(["---"] * (1 + len(radii))),
-        ]
+        rows = []
         for v in variants:
             r = results[v.name][key]
             values = [_pm(x - offset, s, digits) for x, s in zip(r["value"], r["sem"], strict=True)]
-            lines.append(table_row([v.name, *values]))
-        lines.append("")
-    return lines
+            rows.append([v.name, *values])
+        blocks += [
+            Block("h3", title),
+            Block("table", (["variant", *[f"R = {r:g}" for r in radii]], rows)),
+        ]
+    return blocks
 
 
-def _bounds_section(variants, results) -> list[str]:
-    lines = [
-        "### Regime boundaries (cm)",
-        "",
-        "Where the GC distance ratio reaches 0.35 (end of the coupled regime) and 0.5 "
-        "(start of the decoupled one), interpolated between radii; the first radius when "
-        "it starts above, - when it never reaches it.",
-        "",
-        table_row(["variant", "coupled until", "decoupled from", "regime per R"]),
-        table_row(["---"] * 4),
-    ]
+def _bounds_section(variants, results) -> list[Block]:
+    rows = []
     for v in variants:
         b = results[v.name]["regime_bounds"]
-        lines.append(
-            table_row(
-                [
-                    v.name,
-                    _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"], ".2f"),
-                    _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".2f"),
-                    ", ".join(g[:3] for g in results[v.name]["regime"]),
-                ]
-            )
+        rows.append(
+            [
+                v.name,
+                _pm(b["coupled_until"]["value"], b["coupled_until"]["sem"], ".2f"),
+                _pm(b["decoupled_from"]["value"], b["decoupled_from"]["sem"], ".2f"),
+                ", ".join(g[:3] for g in results[v.name]["regime"]),
+            ]
         )
-    return lines
+    return [
+        Block("h3", "Regime boundaries (cm)"),
+        Block(
+            "p",
+            "Where the GC distance ratio reaches 0.35 (end of the coupled regime) and 0.5 "
+            "(start of the decoupled one), interpolated between radii; the first radius when "
+            "it starts above, - when it never reaches it.",
+        ),
+        Block("table", (["variant", "coupled until", "decoupled from", "regime per R"], rows)),
+    ]
 
 
 def _markdown(variants, results, figures, seed: int, base: Design) -> str:
     from softcell._version import __version__
 
-    lines = [
-        "# What the paper's unknowns decide",
-        "",
-        f"Made by `softcell study sensitivity` (softcell {__version__}): {base.describe()}; "
-        f"one unknown moved at a time, root seed {seed} for every variant. Each variant's own "
-        "report is in its folder; the values are in `sensitivity.json`.",
-        "",
-        "Defaults: " + "; ".join(f"{k} {v}" for k, v in DEFAULTS.items()) + ".",
-        "",
+    blocks = [
+        Block("h1", "What the paper's unknowns decide"),
+        Block(
+            "p",
+            f"Made by `softcell study sensitivity` (softcell {__version__}): {base.describe()}; "
+            f"one unknown moved at a time, root seed {seed} for every variant. Each variant's "
+            "own report is in its folder; the values are in `sensitivity.json`.",
+        ),
+        Block("p", "Defaults: " + "; ".join(f"{k} {v}" for k, v in DEFAULTS.items()) + "."),
         *_findings_section(variants, results),
         *_facts_section(variants, results),
         *_values_section(variants, results, base),
         *_bounds_section(variants, results),
-        "",
-        *[f"![{f}](figures/{f})" for f in figures],
-        "",
+        Block("images", [(f, f"figures/{f}") for f in figures]),
     ]
-    return "\n".join(lines) + "\n"
+    return markdown(blocks) + "\n"

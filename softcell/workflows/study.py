@@ -9,7 +9,7 @@ sensitivity`` are studies; this module holds what they share.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -74,8 +74,3 @@ def run_variants(
             progress=progress,
             log=log,
         )
-
-
-def table_row(cells: Iterable[object]) -> str:
-    """One row of a Markdown table."""
-    return "| " + " | ".join(str(c) for c in cells) + " |"
