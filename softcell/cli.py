@@ -91,13 +91,13 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
     """The parameters beyond the model's that ``components`` (kind -> name or names; None for
     every registered component) declare, by name, each with the first component declaring it
     (``"integrator 'rodas4'"``)."""
-    from softcell.core.components.registry import default_registry
+    from softcell.core.components.registry import chosen, default_registry
 
     registry = default_registry()
     found: dict[str, tuple[ParameterSpec, str]] = {}
     for entry in registry:
         cls = entry.component
-        if components is None or _chosen(cls, components):
+        if components is None or chosen(cls, components):
             for spec in cls.parameters:
                 if spec.name not in MODEL_PARAMETERS:
                     found.setdefault(
@@ -146,13 +146,16 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 
 
 def _cmd_params(args: argparse.Namespace) -> int:
-    from softcell.core.components.registry import default_registry
+    from softcell.core.components.registry import check_in_use, default_registry
     from softcell.core.limits import check_run
 
     registry = default_registry()
     config = _config(args).updated(components=_component_flags(args))
     config.check_components(registry)
-    points = expand_sweep(config.parameters, list(registry.parameter_specs().values()))
+    check_in_use(config.parameters, registry, config.components)
+    points = expand_sweep(
+        config.parameters, list(registry.parameter_specs(config.components).values())
+    )
     for _, params in points:
         check_run(params)
     _, first = points[0]
@@ -578,11 +581,6 @@ def _describe(ds: Any) -> str:
     swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
     points = " x ".join(f"{ds.sizes[d]} {d}" for d in swept)
     return f"{ds.sizes['realization']} realization(s)" + (f" at {points}" if points else "")
-
-
-def _chosen(cls: type, components: dict[str, Any]) -> bool:
-    chosen = components.get("energy_terms" if cls.kind == "energy_term" else cls.kind)
-    return cls.name in chosen if isinstance(chosen, list) else cls.name == chosen
 
 
 def _add_plugins(p: argparse.ArgumentParser, strict: bool, specs) -> None:

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import cv2
+import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
@@ -23,6 +24,11 @@ from hypothesis import strategies as st
 
 import softcell
 from softcell.cli import main
+from softcell.core.components.registry import default_registry
+from softcell.core.runconfig import RunConfig
+from softcell.errors import ConfigError
+from softcell.testing import registered
+from softcell.workflows.ensemble import plan
 
 PY = [sys.executable, "-m", "softcell"]
 SMALL = [
@@ -349,6 +355,52 @@ def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
     assert f"softcell version = {softcell.__version__} there, 99.0 in this request" in (
         capsys.readouterr().err
     )
+
+
+def test_installing_a_plugin_changes_no_request(sweep, capsys):
+    # A file stores the parameters of the components it used, and only those: a plugin
+    # installed since, with parameters of its own, leaves the same command reusing every file.
+    import fakeplugins.good
+
+    before = tree_hash(sweep)
+    stored = json.loads(
+        xr.open_dataset(sweep / "point000_realization0000.nc").attrs["softcell_parameters"]
+    )
+    assert "fake_level" not in stored and "threshold" in stored  # the detector in use
+    assert "arena_side" not in stored and "atol" not in stored  # the arena's, rodas4's
+    with registered(fakeplugins.good):
+        assert _simulate(sweep) == 0
+    assert tree_hash(sweep) == before
+
+
+def test_a_file_that_stored_every_installed_components_parameters_is_reused(sweep, capsys):
+    # softcell 0.2.0 stored the parameters of every registered component, used or not.
+    for path in sweep.glob("*.nc"):
+        with netCDF4.Dataset(path, "a") as nc:
+            values = json.loads(nc.getncattr("softcell_parameters"))
+            nc.setncattr(
+                "softcell_parameters",
+                json.dumps({**values, "fake_level": 1.0, "atol": 1e-9}),
+            )
+    before = tree_hash(sweep)
+    assert _simulate(sweep) == 0
+    assert tree_hash(sweep) == before
+
+
+def test_a_value_for_a_component_not_in_use_is_refused(tmp_path, capsys):
+    import fakeplugins.good
+
+    with registered(fakeplugins.good):
+        with pytest.raises(
+            ConfigError, match="'fake_level' belongs to stopgo detector 'fake_hysteresis'"
+        ):
+            plan(
+                RunConfig(parameters={"fake_level": 2.0}),
+                tmp_path,
+                realizations=1,
+                seed=0,
+                registry=default_registry(),
+            )
 
 
 def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, tmp_path, capsys):

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.components.registry import Registry, default_registry
+from softcell.core.components.registry import Registry, check_in_use, default_registry
 from softcell.core.limits import check_run, check_seed
 from softcell.core.params import expand_sweep
 from softcell.core.runconfig import RunConfig
@@ -68,7 +68,11 @@ def plan(
         )
     check_seed(seed)
     config.check_components(registry)
-    points = expand_sweep(config.parameters, list(registry.parameter_specs().values()))
+    check_in_use(config.parameters, registry, config.components)
+    # Only the parameters of the components in use: installing a plugin changes no request.
+    points = expand_sweep(
+        config.parameters, list(registry.parameter_specs(config.components).values())
+    )
     integrator = registry.get("integrator", config.components["integrator"])
     for _, params in points:
         check_run(params)

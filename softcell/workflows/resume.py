@@ -1,7 +1,8 @@
 """What an output folder already holds for a request: files to reuse, to recompute, to remove.
 
 A finished file is reused only when it is complete and was made with exactly the request's
-settings (every parameter, the components, seed, spawn key, package version); a checkpoint
+settings (every parameter of the components in use, the components, seed, spawn key, package
+version); a checkpoint
 only when it was made for the same request. Anything else stops the run with one line naming
 the first setting that differs and both values, unless the user asks to overwrite.
 """
@@ -27,8 +28,14 @@ def _shown(value: Any) -> str:
 
 def first_mismatch(made: dict[str, Any], wanted: dict[str, Any]) -> str | None:
     """``"radius = 4.0 there, 8.0 in this request"`` for the first setting (in the order of
-    ``wanted``) whose value differs, or None when every setting is equal."""
-    for key in [*wanted, *(k for k in made if k not in wanted)]:
+    ``wanted``) whose value differs, or None when every setting is equal.
+
+    A parameter stored in ``made`` that ``wanted`` lacks is no difference: the request holds
+    every parameter of the components it uses, and softcell 0.2.0 also stored those of every
+    installed component (used or not), which must not make its files unusable.
+    """
+    extra = (k for k in made if k not in wanted and not k.startswith("parameter "))
+    for key in [*wanted, *extra]:
         there, here = made.get(key, "(none)"), wanted.get(key, "(none)")
         if json.dumps(there, sort_keys=True) != json.dumps(here, sort_keys=True):
             return f"{key} = {_shown(there)} there, {_shown(here)} in this request"

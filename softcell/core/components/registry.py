@@ -26,7 +26,7 @@ import pluggy
 
 from softcell.core.components import hookspecs
 from softcell.core.components.contracts import CONTRACTS, Component
-from softcell.core.params import Parameters, ParameterSpec, merge_specs, suggest
+from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec, merge_specs, suggest
 from softcell.errors import ConfigError, PluginWarning, RegistryError
 
 ENTRY_POINT_GROUP = "softcell"
@@ -250,27 +250,60 @@ class Registry:
         self.get(kind, name)
         return self._kind(kind)[name].origin
 
-    def parameter_specs(self) -> dict[str, ParameterSpec]:
-        """Every parameter declared by a registered component, by name."""
-        return merge_specs(
-            *(r.component.parameters for kind in self._components.values() for r in kind.values())
-        )
+    def parameter_specs(
+        self, components: Mapping[str, Any] | None = None
+    ) -> dict[str, ParameterSpec]:
+        """The parameters the components declare, by name.
 
-    def parameters(self, values: Mapping[str, Any] | None = None) -> Parameters:
-        """A validated parameter point that knows every registered component's parameters.
+        Parameters
+        ----------
+        components : mapping, optional
+            Component names by kind, as in a run configuration (``energy_terms`` a list,
+            the other kinds one name each): only these components' parameters. None: every
+            registered component's.
+        """
+        return merge_specs(*(r.component.parameters for r in self._in_use(components)))
+
+    def parameters(
+        self, values: Mapping[str, Any] | None = None, components: Mapping[str, Any] | None = None
+    ) -> Parameters:
+        """A validated parameter point with the model's and the components' parameters.
 
         Parameters
         ----------
         values : mapping, optional
             Values that differ from the defaults, by name, each in its declared unit
             (``softcell params`` prints them).
+        components : mapping, optional
+            Component names by kind: the point then holds only these components'
+            parameters (what a file stores, so that installing a plugin changes no request).
+            None: every registered component's.
 
         Returns
         -------
         Parameters
-            With the defaults of the model's and every registered component's parameters.
+
+        Raises
+        ------
+        ConfigError
+            For a value of a parameter that only a component not in ``components`` declares
+            (naming that component), or that no component declares.
         """
-        return Parameters(values, self.parameter_specs().values())
+        check_in_use(values or {}, self, components)
+        return Parameters(values, self.parameter_specs(components).values())
+
+    def owner(self, parameter: str) -> str | None:
+        """``"energy term 'posts'"``: the first registered component declaring ``parameter``
+        beyond the model's own, or None."""
+        for entry in self:
+            if any(s.name == parameter for s in entry.component.parameters):
+                return f"{entry.component.kind.replace('_', ' ')} {entry.component.name!r}"
+        return None
+
+    def _in_use(self, components: Mapping[str, Any] | None) -> list[Registered]:
+        if components is None:
+            return list(self)
+        return [r for r in self if chosen(r.component, components)]
 
     def __iter__(self) -> Iterator[Registered]:
         for kind in KINDS.values():
@@ -283,6 +316,30 @@ class Registry:
             raise ConfigError(
                 f"no component kind {kind!r}; kinds: " + ", ".join(KINDS.values())
             ) from None
+
+
+def chosen(cls: type[Component], components: Mapping[str, Any]) -> bool:
+    """Whether ``components`` (names by kind, ``energy_terms`` a list) names ``cls``."""
+    names = components.get("energy_terms" if cls.kind == "energy_term" else cls.kind)
+    return cls.name in names if isinstance(names, list | tuple) else cls.name == names
+
+
+def check_in_use(
+    values: Mapping[str, Any], registry: Registry, components: Mapping[str, Any] | None
+) -> None:
+    """Raise :class:`ConfigError` for a value given to a parameter that only a component not
+    in ``components`` declares (None: every component is in use)."""
+    if components is None:
+        return
+    specs = registry.parameter_specs(components)
+    for name, value in values.items():
+        if value is not None and name not in specs and name not in MODEL_PARAMETERS:
+            owner = registry.owner(name)
+            if owner is not None:
+                raise ConfigError(
+                    f"parameter {name!r} belongs to {owner}, which this run does not use; "
+                    "choose that component or drop the value"
+                )
 
 
 def _normal(name: str) -> str:
