@@ -7,8 +7,10 @@ import types
 import pytest
 
 import softcell
+from softcell.core.analysis.options import ANALYSIS_OPTIONS
 from softcell.core.components.contracts import StopGoDetector
 from softcell.core.components.registry import KINDS, PluginWarning, Registry, default_registry
+from softcell.core.params import MODEL_PARAMETERS, unit_problem
 from softcell.errors import ConfigError, RegistryError
 from softcell.testing import registered
 
@@ -77,6 +79,46 @@ def test_malformed_plugins_are_skipped_loudly(tmp_path, monkeypatch, module, mes
     with pytest.warns(PluginWarning, match=message):
         registry = Registry(entry_points=eps)
     assert registry.names("stopgo_detector") == ["threshold"]
+
+
+def test_a_component_whose_unit_is_no_unit_is_skipped_alone(tmp_path, monkeypatch):
+    eps = fake_entry_points(tmp_path, monkeypatch, units="badunits")
+    with pytest.warns(PluginWarning) as caught:
+        registry = Registry(entry_points=eps)
+    (message,) = [str(w.message) for w in caught]
+    assert "the stopgo detector Bananas of softcell plugin 'units'" in message
+    assert "softcell-fake 1.2" in message
+    assert "parameter 'banana_level': unit 'bananas' does not parse as UDUNITS-2" in message
+    assert "parameter 'blank_level': unit '' is not a UDUNITS-2 unit string" in message
+    assert registry.names("stopgo_detector") == ["plain", "threshold"]
+
+
+@pytest.mark.parametrize(
+    ("unit", "ok"),
+    [
+        ("1", True),
+        ("N cm-2", True),
+        ("cm s-1", True),
+        ("rad", True),
+        ("N s cm-2", True),
+        ("", False),
+        (None, False),
+        ("bananas", False),
+        ("unknown", False),
+        (" ", False),
+    ],
+)
+def test_units_parse_as_udunits(unit, ok):
+    assert (unit_problem(unit) is None) == ok
+
+
+def test_every_builtin_unit_parses():
+    specs = [
+        *MODEL_PARAMETERS.values(),
+        *ANALYSIS_OPTIONS.values(),
+        *Registry(entry_points=[]).parameter_specs().values(),
+    ]
+    assert [(s.name, s.unit) for s in specs if unit_problem(s.unit)] == []
 
 
 def test_duplicate_name_is_an_error_naming_both_origins(tmp_path, monkeypatch):

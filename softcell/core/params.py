@@ -13,6 +13,7 @@ Units follow docs/model.md §1: cm, s, rad, N. Unit strings are UDUNITS-2 syntax
 from __future__ import annotations
 
 import difflib
+import functools
 import itertools
 import json
 import math
@@ -132,6 +133,26 @@ class ParameterSpec:
         ):
             return False
         return not self.power_of_two or (value > 0 and (int(value) & (int(value) - 1)) == 0)
+
+
+@functools.cache
+def unit_problem(unit: object) -> str | None:
+    """Why ``unit`` is not a unit a parameter may declare, or None.
+
+    A unit is a non-empty UDUNITS-2 string (``"N cm-2"``; ``"1"`` for dimensionless), parsed
+    by cf-units, which ships UDUNITS-2 in its wheels.
+    """
+    if not isinstance(unit, str) or not unit.strip():
+        return f"unit {unit!r} is not a UDUNITS-2 unit string (use '1' for dimensionless)"
+    import cf_units
+
+    try:
+        parsed = cf_units.Unit(unit)
+    except ValueError:
+        return f"unit {unit!r} does not parse as UDUNITS-2"
+    if parsed.is_unknown() or parsed.is_no_unit():
+        return f"unit {unit!r} is not a physical unit (use '1' for dimensionless)"
+    return None
 
 
 def _positive(name: str, default: float, unit: str, long_name: str) -> ParameterSpec:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-from softcell.core.params import ParameterSpec
+from softcell.core.params import ParameterSpec, unit_problem
 from softcell.errors import ContractError
 
 if TYPE_CHECKING:
@@ -77,8 +77,9 @@ class Component(ABC):
 
     @classmethod
     def contract_problems(cls) -> list[str]:
-        """What is wrong with this class as a component (empty when it is well formed; no
-        units)."""
+        """What is wrong with this class as a component, one phrase each (empty when it is
+        well formed): its name, description, abstract methods, and each parameter's unit,
+        which must parse as UDUNITS-2."""
         problems = []
         name = getattr(cls, "name", None)
         if not isinstance(name, str) or not _NAME.match(name):
@@ -88,6 +89,11 @@ class Component(ABC):
             problems.append("description must be one non-empty line")
         if not all(isinstance(s, ParameterSpec) for s in cls.parameters):
             problems.append("parameters must be a tuple of ParameterSpec")
+        else:
+            for spec in cls.parameters:
+                why = unit_problem(spec.unit)
+                if why:
+                    problems.append(f"parameter {spec.name!r}: {why}")
         if getattr(cls, "__abstractmethods__", None):
             missing = ", ".join(sorted(cls.__abstractmethods__))
             problems.append(f"abstract methods not implemented: {missing}")

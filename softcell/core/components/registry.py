@@ -155,12 +155,16 @@ class Registry:
         self.pm.register(plugin, name=name)
         self._origins[name] = origin
 
-    def _skip(self, plugin: str, origin: str, error: BaseException | str) -> None:
+    def _skip(
+        self, plugin: str, origin: str, error: BaseException | str, component: str = ""
+    ) -> None:
+        """Warn that ``plugin`` (or only its ``component``, when given) was skipped."""
         reason = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
-        self.skipped.append((plugin, reason))
-        self.skipped_origins[plugin] = origin
+        what = f"{component} of softcell plugin" if component else "softcell plugin"
+        self.skipped.append((f"{plugin}: {component}" if component else plugin, reason))
+        self.skipped_origins[self.skipped[-1][0]] = origin
         warnings.warn(
-            f"softcell plugin {plugin!r} from {origin} was skipped: {reason}",
+            f"{what} {plugin!r} from {origin} was skipped: {reason}",
             PluginWarning,
             stacklevel=3,
         )
@@ -191,9 +195,6 @@ class Registry:
                         raise TypeError(
                             f"{hook_name} returned {cls!r}, not a subclass of {contract.__name__}"
                         )
-                    problems = cls.contract_problems()
-                    if problems:
-                        raise TypeError(f"{cls.__qualname__}: " + "; ".join(problems))
                 found.setdefault(contract.kind, []).extend(result)
         return found
 
@@ -209,6 +210,15 @@ class Registry:
                 continue
             for kind, classes in found.items():
                 for cls in classes:
+                    problems = cls.contract_problems()
+                    if problems:  # this component alone is skipped, loudly
+                        self._skip(
+                            plugin_name,
+                            origin,
+                            "; ".join(problems),
+                            f"the {kind.replace('_', ' ')} {cls.__qualname__}",
+                        )
+                        continue
                     other = components[kind].get(cls.name)
                     if other is not None:
                         raise RegistryError(
