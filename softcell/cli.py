@@ -209,11 +209,12 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs, write_dataset
 
-    options = {
-        k.removeprefix("param_"): v
+    options = dict(load_config(args.config).analysis) if args.config else {}
+    options.update(
+        (k.removeprefix("param_"), v)
         for k, v in vars(args).items()
         if k.startswith("param_") and v is not None
-    }
+    )
     check_output(args.output, "analysis", inputs=args.inputs, overwrite=args.overwrite)
     ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
     result = analyze(ds, options, progress=not args.quiet)
@@ -661,13 +662,38 @@ def _add_analyze(p: argparse.ArgumentParser, strict: bool, specs) -> None:
         help="replace an existing file that is not a softcell analysis",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--config",
+        type=Path,
+        help="TOML file whose [analysis] table sets options (flags override it)",
+    )
     _add_parameter_flags(
         p,
         list(ANALYSIS_OPTIONS.values()),
         "analysis options",
         "see docs/analysis.md; stored in the output file",
     )
+    _add_parameter_flags(
+        p,
+        _detector_specs(),
+        "stop/go detector parameters",
+        "parameters of the detectors (default: the value the input was made with, else the "
+        "detector's default); one of a detector the analysis does not use is an error",
+    )
     p.set_defaults(func=_cmd_analyze)
+
+
+def _detector_specs() -> list[ParameterSpec]:
+    """Every registered detector's parameters beyond the analysis options."""
+    from softcell.core.analysis.options import ANALYSIS_OPTIONS
+    from softcell.core.components.registry import default_registry
+
+    specs: dict[str, ParameterSpec] = {}
+    for entry in default_registry().entries("stopgo_detector"):
+        for spec in entry.component.parameters:
+            if spec.name not in ANALYSIS_OPTIONS:
+                specs.setdefault(spec.name, spec)
+    return list(specs.values())
 
 
 def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:

@@ -14,6 +14,7 @@ import xarray as xr
 from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_model, circle_modes, force_modes
 from softcell.core.params import Parameters
+from softcell.errors import ConfigError
 from softcell.testing import registered
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
@@ -223,3 +224,101 @@ def test_hysteresis_holds_its_label_between_the_thresholds(example):
     speed = np.array([[0.0, 0.03, 0.06, 0.04, 0.03, 0.01, 0.03, np.nan, 0.04, 0.07]])
     expected = np.array([[0, 0, 1, 1, 1, 0, 0, -1, 0, 1]])
     np.testing.assert_array_equal(detector.label(speed, 0.01), expected)
+
+
+def run_cli(site, *args, cwd):
+    """``python -m softcell ARGS`` with the example installed; the completed process."""
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(site), *filter(None, [os.environ.get("PYTHONPATH")])]),
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "softcell", *map(str, args)],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+
+
+@pytest.fixture(scope="module")
+def hysteresis_run(site, tmp_path_factory):
+    """A simulation made with the hysteresis detector and go_above = 0.07 (from TOML)."""
+    folder = tmp_path_factory.mktemp("hysteresis")
+    (folder / "sim.toml").write_text(
+        "[parameters]\ngo_above = 0.07\nradius = 5\nduration = 0.3\ncutoff = 4\n"
+        'nodes = 64\nstored_nodes = 16\n[components]\nstopgo_detector = "hysteresis"\n'
+        "[analysis]\ndiscard = 0.05\nstop_below = 0.01\n"
+    )
+    softcell_cli(site, "simulate", "sim.toml", "-o", "run", "--quiet", cwd=folder)
+    return folder
+
+
+def detector_attrs(path):
+    with xr.open_dataset(path) as ds:
+        return (
+            ds.attrs["softcell_detector"],
+            json.loads(ds.attrs["softcell_detector_parameters"]),
+            json.loads(ds.attrs["softcell_parameters"]),
+            json.loads(ds.attrs["softcell_components"])["stopgo_detector"],
+        )
+
+
+def test_the_detector_and_its_parameters_come_from_the_input_toml_and_flags(site, hysteresis_run):
+    cwd = hysteresis_run
+    # The input's detector, its stored go_above, the TOML's stop_below.
+    softcell_cli(site, "analyze", "run", "-o", "a.nc", "--config", "sim.toml", "--quiet", cwd=cwd)
+    name, ran, params, component = detector_attrs(cwd / "a.nc")
+    assert (name, component) == ("hysteresis", "hysteresis")
+    assert ran == {"go_above": 0.07, "stop_below": 0.01}
+    assert (params["go_above"], params["stop_below"]) == (0.07, 0.01)  # what ran, not the input's
+    # A flag over the TOML over the input.
+    softcell_cli(
+        site, "analyze", "run", "-o", "b.nc", "--config", "sim.toml", "--go-above", "0.2",
+        "--stop-below", "0.05", "--quiet", cwd=cwd,
+    )  # fmt: skip
+    assert detector_attrs(cwd / "b.nc")[1] == {"go_above": 0.2, "stop_below": 0.05}
+    # Another detector: the input's hysteresis values do not follow it.
+    softcell_cli(
+        site, "analyze", "run", "-o", "c.nc", "--detector", "threshold", "--discard", "0.05",
+        "--quiet", cwd=cwd,
+    )  # fmt: skip
+    name, ran, params, component = detector_attrs(cwd / "c.nc")
+    assert (name, ran, component) == ("threshold", {"threshold": 0.03}, "threshold")
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (
+            ["--stop-below", "0.5"],
+            "stop/go detector 'hysteresis' refuses its parameters: parameter stop_below = 0.5",
+        ),
+        (
+            ["--detector", "threshold", "--go-above", "0.5"],
+            "'go_above' belongs to stop/go detector 'hysteresis', which this analysis does not use",
+        ),
+        (["--go-above", "-1"], "go_above = -1"),
+        (["--hmm-go-speed", "0.3"], "unrecognized arguments: --hmm-go-speed"),
+    ],
+)
+def test_a_refused_detector_setting_is_one_line_and_exit_2(site, hysteresis_run, flags, message):
+    done = run_cli(site, "analyze", "run", "-o", "bad.nc", *flags, "--quiet", cwd=hysteresis_run)
+    assert done.returncode == 2
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert not (hysteresis_run / "bad.nc").exists()
+
+
+def test_analyze_takes_detector_parameters_as_options(example, hysteresis_run):
+    from softcell.core.analysis import analyze
+    from softcell.io.netcdf import open_inputs
+
+    ds = open_inputs([hysteresis_run / "run"])
+    with example():
+        out = analyze(ds, {"discard": 0.05, "go_above": 0.3, "stop_below": 0.1})
+        with pytest.raises(ConfigError, match="unknown analysis option 'go_abov'"):
+            analyze(ds, {"go_abov": 0.3})
+    assert json.loads(out.attrs["softcell_detector_parameters"]) == {
+        "go_above": 0.3,
+        "stop_below": 0.1,
+    }

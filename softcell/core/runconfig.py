@@ -17,6 +17,10 @@ A configuration file has up to three tables::
     seed = 1
     realizations = 25
 
+    [analysis]              # softcell analyze --config: analysis options and the
+    detector = "threshold"  # detector's parameters (softcell analyze --help lists them)
+    threshold = 0.05
+
 Values are in the units of the parameter table (``softcell params`` prints it).
 """
 
@@ -41,16 +45,18 @@ DEFAULT_COMPONENTS: dict[str, Any] = {
     "stopgo_detector": "threshold",
 }
 RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}
-SECTIONS = ("parameters", "components", "run")
+SECTIONS = ("parameters", "components", "run", "analysis")
 
 
 @dataclass(frozen=True)
 class RunConfig:
-    """Parameter values (a list value is a sweep), component names by kind, run settings."""
+    """Parameter values (a list value is a sweep), component names by kind, run settings,
+    and analysis options (validated by the analysis)."""
 
     parameters: dict[str, Any] = field(default_factory=dict)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
     run: dict[str, Any] = field(default_factory=dict)
+    analysis: dict[str, Any] = field(default_factory=dict)
 
     def updated(
         self,
@@ -120,4 +126,5 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
         parameters=dict(data.get("parameters", {})),
         components={**DEFAULT_COMPONENTS, **components},
         run=run,
+        analysis=dict(data.get("analysis", {})),
     )

@@ -68,7 +68,13 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
         ParameterSpec(
             "confined_side", 100.0, "cm", "side L of the confined-square MSD formula", minimum=0.0
         ),
-        ParameterSpec("detector", "threshold", "1", "stop/go detector (a plugin name)", kind=str),
+        ParameterSpec(
+            "detector",
+            None,
+            "1",
+            "stop/go detector, a plugin name (default: the input's, else threshold)",
+            kind=str,
+        ),
         ParameterSpec(
             "stopgo_segments",
             "all",

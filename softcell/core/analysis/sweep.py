@@ -21,6 +21,7 @@ import xarray as xr
 
 from softcell._version import __version__
 from softcell.core.analysis import fits, stopgo
+from softcell.core.analysis.detector import DetectorChoice, choose_detector, split_options
 from softcell.core.analysis.msd import log_lags, msd_sums
 from softcell.core.analysis.options import analysis_options, options_attrs
 from softcell.core.analysis.series import (
@@ -30,7 +31,7 @@ from softcell.core.analysis.series import (
     speed,
 )
 from softcell.core.components.registry import Registry, default_registry
-from softcell.core.params import Parameters, parameter_attrs
+from softcell.core.params import parameter_attrs
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
 from softcell.errors import SoftcellError
 
@@ -66,14 +67,6 @@ def _radius(ds: xr.Dataset, point: Mapping[str, int]) -> float:
     params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
     value = params.get("radius")
     return float(value) if isinstance(value, (int, float)) else np.nan
-
-
-def _detector(registry: Registry, name: str, threshold: float | None):
-    cls = registry.get("stopgo_detector", name)
-    values = {"threshold": threshold} if threshold is not None else {}
-    if values and "threshold" not in {s.name for s in cls.parameters}:
-        raise SoftcellError(f"stop/go detector {name!r} has no parameter 'threshold'")
-    return cls(Parameters(values, cls.parameters))
 
 
 class LagPlan:
@@ -192,18 +185,18 @@ class _Setup:
     def __init__(
         self, ds: xr.Dataset, options: Mapping[str, Any] | None, registry: Registry
     ) -> None:
-        opts = analysis_options(options)
+        asked, given = split_options(options, registry)
+        opts = analysis_options(asked)
         require(ds)
-        self.opts = opts
         self.origin = ds.attrs.get("softcell_origin", "simulation")
-        threshold = opts["threshold"]
-        if threshold is None and self.origin == "tracking" and opts["detector"] == "threshold":
-            threshold = stopgo.EXPERIMENT_THRESHOLD
-        self.detector = _detector(registry, opts["detector"], threshold)
-        self.threshold = self.detector.params.get("threshold", threshold)
+        self.choice = choose_detector(ds.attrs, opts, given, registry)
+        self.detector = self.choice.build()
+        self.threshold = self.choice.values.get("threshold")
+        # What ran: the detector chosen, and its threshold (None if it has none).
+        self.opts = opts = {**opts, "detector": self.choice.name, "threshold": self.threshold}
         self.shifts = np.array([-opts["threshold_shift"], 0.0, opts["threshold_shift"]])
         self.shifted = [
-            _detector(registry, opts["detector"], self.threshold + s)
+            self.choice.build(threshold=self.threshold + s)
             if self.threshold is not None and self.threshold + s >= 0
             else None
             for s in self.shifts
@@ -548,17 +541,27 @@ def analyze(
         "softcell_threshold": np.nan if setup.threshold is None else float(setup.threshold),
         **options_attrs(opts),
         **{
-            k: v
-            for k, v in ds.attrs.items()
-            if k
-            in (
-                "softcell_parameters",
-                "softcell_parameter_units",
-                "softcell_seed",
-                "softcell_components",
-                "softcell_swept_parameters",
-            )
+            k: v for k, v in ds.attrs.items() if k in ("softcell_seed", "softcell_swept_parameters")
         },
-        **parameter_attrs(json.loads(ds.attrs.get("softcell_parameters", "{}"))),
+        **_what_ran(ds.attrs, setup.choice),
     }
     return out
+
+
+def _what_ran(attrs: Mapping[str, Any], choice: DetectorChoice) -> dict[str, Any]:
+    """The input's parameters and components, with the detector and its parameters as they
+    ran here (not as the input recorded them), and the detector's parameters on their own."""
+    out: dict[str, Any] = {
+        "softcell_detector_parameters": json.dumps(choice.values, sort_keys=True),
+        "softcell_detector_parameter_units": json.dumps(choice.units(), sort_keys=True),
+    }
+    if "softcell_parameters" not in attrs:  # a tracked video: no model parameters
+        return out
+    params = {**json.loads(attrs["softcell_parameters"]), **choice.values}
+    units = {**json.loads(attrs.get("softcell_parameter_units", "{}")), **choice.units()}
+    out["softcell_parameters"] = json.dumps(params)
+    out["softcell_parameter_units"] = json.dumps(units)
+    if "softcell_components" in attrs:
+        components = json.loads(attrs["softcell_components"])
+        out["softcell_components"] = json.dumps({**components, "stopgo_detector": choice.name})
+    return {**out, **parameter_attrs(params)}
