@@ -4,14 +4,15 @@ and the signature, before any time step."""
 
 import types
 
+import numpy as np
 import pytest
 from numba import njit
 
 import softcell
 from softcell.cli import main
-from softcell.core.components.contracts import EnergyTerm
+from softcell.core.components.contracts import EnergyTerm, FrictionLaw
 from softcell.core.engine import build_model
-from softcell.core.params import Parameters
+from softcell.core.params import MODEL_PARAMETERS, Parameters
 from softcell.errors import ContractError
 from softcell.plugins.run_and_tumble import RunAndTumble
 from softcell.testing import registered
@@ -163,3 +164,137 @@ def test_the_contract_signatures_are_the_types_the_engine_calls_with():
     counts = json.loads(run.stdout.strip().splitlines()[-1])
     assert len(counts) == 8  # 3 terms x (partials, hessian) and 2 drives
     assert set(counts.values()) == {1}, counts
+
+
+# -- non-finite kernels are named ------------------------------------------------------------
+
+
+@njit
+def partials_nan(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
+    for n in range(x.size):
+        p0x[n] += 0.0
+        p1y[n] += np.nan if n == 5 else 0.0
+
+
+@njit
+def partials_nan_away(
+    x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
+):
+    # Finite while the bot is within 0.1 cm of the origin, NaN once it has run away.
+    if pose[0] * pose[0] + pose[1] * pose[1] > 0.01:
+        dpose[0] += np.nan
+
+
+@njit
+def velocity_nan(fx, fy, coefficients, vx, vy):
+    for n in range(fx.size):
+        vx[n] = fx[n] / coefficients[0]
+        vy[n] = np.sqrt(-1.0 - fy[n] * fy[n])  # NaN everywhere
+
+
+class NanTerm(ShortTerm):
+    name = "nan_term"
+    description = "a partials kernel that writes NaN (a test)"
+    couples_bot = True
+
+    def partials_kernel(self):
+        return partials_nan
+
+
+class NanAwayTerm(NanTerm):
+    name = "nan_away"
+    description = "a partials kernel that writes NaN once the bot has moved (a test)"
+
+    def partials_kernel(self):
+        return partials_nan_away
+
+
+class NanLaw(FrictionLaw):
+    name = "nan_law"
+    description = "a friction law whose velocity is NaN (a test)"
+    parameters = (MODEL_PARAMETERS["membrane_friction"],)
+
+    def velocity_kernel(self):
+        return velocity_nan
+
+
+NAN_PLUGIN = types.SimpleNamespace(
+    softcell_energy_terms=softcell.hookimpl(lambda: [NanTerm, NanAwayTerm]),
+    softcell_friction_laws=softcell.hookimpl(lambda: [NanLaw]),
+)
+SMALL = ["--radius", "4", "--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--quiet"]
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (
+            ["--energy-terms", "bending,tension,contact,nan_term"],
+            "energy term 'nan_term': partials_kernel() wrote non-finite p1y at point 5 of 64",
+        ),
+        (
+            ["--friction-law", "nan_law"],
+            "friction law 'nan_law': velocity_kernel() wrote non-finite vy at point 0 of 32",
+        ),
+    ],
+)
+@pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
+def test_a_non_finite_kernel_is_named_before_any_step(tmp_path, capsys, flags, named, integrator):
+    with registered(NAN_PLUGIN):
+        status = main(
+            ["simulate", *SMALL, "--duration", "0.05", "--integrator", integrator, *flags,
+             "-o", str(tmp_path)]
+        )  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1
+    assert err[0] == (
+        f"softcell: error: registered object 'test_plugin': {named} at the initial state "
+        "(t = 0 s), before any time step"
+    )
+    assert not list(tmp_path.glob("*.nc")) and not list(tmp_path.glob(".*ckpt*"))
+
+
+@pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
+def test_a_kernel_that_goes_non_finite_later_is_named_when_the_run_fails(
+    tmp_path, capsys, integrator
+):
+    with registered(NAN_PLUGIN):
+        status = main(
+            ["simulate", *SMALL, "--duration", "1", "--integrator", integrator, "--dt", "1e-5",
+             "--energy-terms", "bending,tension,contact,nan_away", "-o", str(tmp_path)]
+        )  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(err) == 1, err
+    assert (
+        "the first non-finite output is registered object 'test_plugin': energy term "
+        "'nan_away': partials_kernel() wrote non-finite dpose"
+        in err[0]
+        and "reduce dt" not in err[0]
+    ), err[0]
+
+
+def test_a_run_that_diverges_with_finite_kernels_says_so():
+    # A state that went non-finite while every built-in kernel is finite before it and along
+    # its course: the integration itself is blamed, not a component.
+    from softcell.core.engine.probe import diagnose
+    from softcell.core.engine.state import initial_state
+
+    registry = softcell.core.components.registry.default_registry()
+    params = registry.parameters({"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16})
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", registry=registry
+    )
+    modes, pose, schedule = initial_state(model, np.random.default_rng(1))
+    why = diagnose(
+        model,
+        np.array([0.0, 0.01]),
+        np.vstack([modes, np.full_like(modes, np.nan)]),
+        np.vstack([pose, np.full(3, np.nan)]),
+        schedule,
+    )
+    assert why == (
+        "every component's kernels are finite at the last finite state (t = 0 s) and just "
+        "ahead of it: the integration itself diverged (reduce dt or tighten the tolerances)"
+    )

@@ -15,10 +15,11 @@ from typing import Protocol
 import numpy as np
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.components.contracts import Stepper
+from softcell.core.components.contracts import Schedule, Stepper
 from softcell.core.engine.model import Model
+from softcell.core.engine.probe import diagnose
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
-from softcell.errors import Interrupted
+from softcell.errors import Interrupted, SimulationError
 
 #: Samples handed to the stepper per call (progress, checks and checkpoints happen between
 #: calls): 1 s of simulated time at the paper's early sampling.
@@ -106,10 +107,12 @@ def run_realization(
         )
 
     done, done_state = first, _copy_state(state)  # the last consistent point
+    filled = first  # samples recorded so far (finite or not)
     try:
         for i in range(first, times.size, SAMPLES_PER_CALL):
             j = min(i + SAMPLES_PER_CALL, times.size)
             rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
+            filled = j
             check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
             done, done_state = j, _copy_state(state)
             if progress:
@@ -119,6 +122,16 @@ def run_realization(
                 last_save = time.monotonic()
             if stop is not None and stop():
                 raise KeyboardInterrupt
+    except SimulationError as exc:
+        reached = stepper.current(state)  # a failed step may have run ahead of the samples
+        why = diagnose(
+            model,
+            np.append(times[:filled], reached[2]),
+            np.vstack([rec_modes[:filled], reached[0][None]]),
+            np.vstack([rec_pose[:filled], reached[1][None]]),
+            schedule,
+        )
+        raise SimulationError(f"{exc}; {why}") from None
     except KeyboardInterrupt:
         # The stepper may have been stopped half way through a chunk: save what is whole.
         if checkpoint is not None:

@@ -339,6 +339,13 @@ class Rodas4Stepper(Stepper):
     def advance(self, state, schedule: Schedule, t_end: float) -> None:
         self.sample(state, schedule, np.array([t_end], dtype=np.float64))
 
+    def current(self, state) -> tuple[np.ndarray, np.ndarray, float]:
+        """The last accepted step's modes (cm), pose (cm, cm, rad) and time (s), which run
+        ahead of ``modes`` and ``pose`` (the last sample's) when a step fails."""
+        size = 2 * self.model.cutoff + 1
+        u = state["u"]
+        return u[:size] + 1j * u[size : 2 * size], u[2 * size :].copy(), float(state["clock"][T])
+
     def sample(self, state, schedule: Schedule, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.model
         times = np.ascontiguousarray(times, dtype=np.float64)

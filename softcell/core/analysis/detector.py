@@ -49,11 +49,11 @@ class DetectorChoice:
         """The detector with ``values`` (updated by ``changes``), validated by its ranges and
         its ``check()`` (:class:`~softcell.errors.ParameterError` for a refused set)."""
         try:
-            return self.component(
-                Parameters({**self.values, **changes}, self.component.parameters)
-            )
+            return self.component(Parameters({**self.values, **changes}, self.component.parameters))
         except ParameterError as exc:
-            raise ConfigError(f"stop/go detector {self.name!r} refuses its parameters: {exc}") from None
+            raise ConfigError(
+                f"stop/go detector {self.name!r} refuses its parameters: {exc}"
+            ) from None
 
     def units(self) -> dict[str, str]:
         """The unit of each of :attr:`values`."""

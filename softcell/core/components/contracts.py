@@ -360,6 +360,12 @@ class Stepper(ABC):
     def advance(self, state: dict[str, np.ndarray], schedule: Schedule, t_end: float) -> None:
         """Advance ``state`` in place to time ``t_end`` (s)."""
 
+    def current(self, state: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, float]:
+        """The modes (cm), pose (cm, cm, rad) and time (s) the integrator has reached, for
+        the diagnosis of a failed run. The default: ``state``'s ``modes``, ``pose`` and
+        ``time``; an integrator whose steps run ahead of them overrides it."""
+        return state["modes"], state["pose"], float(state["time"][0])
+
     def sample(
         self, state: dict[str, np.ndarray], schedule: Schedule, times: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:

@@ -22,6 +22,7 @@ from softcell.core.components.contracts import (
 )
 from softcell.core.components.registry import Registry
 from softcell.core.engine.compose import compose_partials
+from softcell.core.engine.probe import probe_components
 from softcell.core.params import Parameters
 
 
@@ -74,6 +75,8 @@ class Model:
     friction_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(1))
     force_scale: float = 1.0
     names: dict[str, object] = field(default_factory=dict)
+    #: Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
+    origins: dict[str, str] = field(default_factory=dict)
 
     @property
     def has_membrane(self) -> bool:
@@ -131,21 +134,25 @@ def build_model(
     Raises
     ------
     ContractError
-        When a component's kernel does not compile for its contract's signature.
+        When a component's kernel does not compile for its contract's signature, or writes
+        a non-finite value at an initial state (naming origin, component, kernel, quantity).
     """
     terms = [registry.get("energy_term", n)(params) for n in energy_terms]
     if not membrane:
         terms = [t for t in terms if t.acts_on_bot]
     drive = registry.get("driving_protocol", protocol)(params)
     friction: FrictionLaw = registry.get("friction_law", friction_law)(params)
+    origins = {
+        f"{c.kind} {c.name}": registry.origin(c.kind, c.name) for c in (*terms, drive, friction)
+    }
     for component in (*terms, drive, friction):
-        check_kernels(component, registry.origin(component.kind, component.name))
+        check_kernels(component, origins[f"{component.kind} {component.name}"])
     kernels = [t.partials_kernel() for t in terms]
     coefficients = tuple(np.ascontiguousarray(t.coefficients()) for t in terms)
     if not coefficients:
         coefficients = (np.zeros(1),)
     l0 = params.membrane_length
-    return Model(
+    model = Model(
         params=params,
         terms=terms,
         protocol=drive,
@@ -173,7 +180,10 @@ def build_model(
             "driving_protocol": protocol,
             "friction_law": friction_law,
         },
+        origins=origins,
     )
+    probe_components(model)  # a kernel writing NaN is named here, before anything steps
+    return model
 
 
 def build_integrator(name: str, params: Parameters, registry: Registry) -> Integrator:
