@@ -15,7 +15,7 @@ from typing import Protocol
 import numpy as np
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.components.contracts import Schedule, Stepper
+from softcell.core.components.contracts import Stepper
 from softcell.core.engine.model import Model
 from softcell.core.engine.probe import diagnose
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times

@@ -4,8 +4,9 @@ When a model is built, :func:`probe_components` runs each kernel of each compone
 (an energy term's partials, Hessian and bot kernels, the drive, the friction law and its
 derivative) once on an initial state, before anything steps; a non-finite output is a
 :class:`ContractError` naming the component's origin (distribution or built-in module), the
-component, the kernel and the quantity. When a run fails later, :func:`diagnose` says which component's output is the first
-to be non-finite at the last finite state or just ahead of it on its course, or that none is.
+component, the kernel and the quantity. When a run fails later, :func:`diagnose` says which
+component's output is the first to be non-finite at the last finite state or just ahead of it
+on its course, or that none is.
 """
 
 from __future__ import annotations
