@@ -188,7 +188,7 @@ def partials_nan_away(
 
 
 @njit
-def velocity_nan(fx, fy, coefficients, vx, vy):
+def velocity_nan(x, y, tx, ty, fx, fy, coefficients, vx, vy):
     for n in range(fx.size):
         vx[n] = fx[n] / coefficients[0]
         vy[n] = np.sqrt(-1.0 - fy[n] * fy[n])  # NaN everywhere

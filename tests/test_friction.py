@@ -96,6 +96,42 @@ class CoulombByDifferences(FrictionLaw):
         return coulomb_velocity
 
 
+@njit
+def radial_velocity(x, y, tx, ty, fx, fy, coefficients, vx, vy):
+    for n in range(x.size):  # v = c (x, y): the force is ignored, the position read
+        vx[n] = coefficients[0] * x[n]
+        vy[n] = coefficients[0] * y[n]
+
+
+@njit
+def tangential_velocity(x, y, tx, ty, fx, fy, coefficients, vx, vy):
+    for n in range(x.size):  # v = c t: the membrane slides along itself
+        vx[n] = coefficients[0] * tx[n]
+        vy[n] = coefficients[0] * ty[n]
+
+
+class RadialDrift(FrictionLaw):
+    """Reads the points the law receives: a circle about the origin grows as e^{ct}."""
+
+    name = "radial_drift"
+    description = "v = c (x, y), whatever the force (a test of the points a law receives)"
+    parameters = (ParameterSpec("drift_rate", 0.02, "s-1", "growth rate c"),)
+
+    def velocity_kernel(self):
+        return radial_velocity
+
+
+class TangentialDrift(FrictionLaw):
+    """Reads the tangents: a circle of radius R turns rigidly at c / R."""
+
+    name = "tangential_drift"
+    description = "v = c t, whatever the force (a test of the tangents a law receives)"
+    parameters = (ParameterSpec("drift_speed", 0.5, "cm s-1", "sliding speed c"),)
+
+    def velocity_kernel(self):
+        return tangential_velocity
+
+
 class Plugin:
     @hookimpl
     def softcell_energy_terms(self):
@@ -103,7 +139,7 @@ class Plugin:
 
     @hookimpl
     def softcell_friction_laws(self):
-        return [CoulombByDifferences]
+        return [CoulombByDifferences, RadialDrift, TangentialDrift]
 
 
 @pytest.fixture(scope="module")
@@ -136,7 +172,35 @@ def _run(registry, terms, law, integrator, times, modes=None, **values):
     return model, stepper.sample(state, _schedule(times[-1]), np.asarray(times))
 
 
+# -- what a law sees --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "integrator", [pytest.param("rodas4", marks=pytest.mark.slow), "explicit_euler"]
+)
+def test_a_law_receives_the_membranes_points_and_unit_tangents(plugin, integrator):
+    # Points: v = c (x, y) grows the circle about the origin as R e^{ct}. Tangents: v = c t
+    # turns it rigidly, g_1 = R e^{i c t / R}. Both exact; the modes k != 1 stay zero.
+    times = np.linspace(0.0, 1.0, 11)
+    small = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5, "rtol": 1e-10, "atol": 1e-12}
+    terms = ["bending", "tension"]
+    model, (modes, _) = _run(plugin, terms, "radial_drift", integrator, times, **small)
+    np.testing.assert_allclose(modes[:, model.cutoff + 1], 4.0 * np.exp(0.02 * times), rtol=1e-6)
+    others = np.delete(modes, model.cutoff + 1, axis=1)
+    assert np.abs(others).max() <= 1e-9
+    model, (modes, _) = _run(plugin, terms, "tangential_drift", integrator, times, **small)
+    np.testing.assert_allclose(
+        modes[:, model.cutoff + 1], 4.0 * np.exp(1j * 0.5 * times / 4.0), rtol=1e-6
+    )
+    assert np.abs(np.delete(modes, model.cutoff + 1, axis=1)).max() <= 1e-9
+
+
 # -- the law itself -------------------------------------------------------------------------
+
+
+def shape(n):
+    """Points and unit tangents of n membrane points (the coulomb law reads neither)."""
+    return np.zeros(n), np.zeros(n), np.ones(n), np.zeros(n)
 
 
 def test_the_kernel_is_the_closed_form_and_converges_to_the_sharp_law():
@@ -145,7 +209,9 @@ def test_the_kernel_is_the_closed_form_and_converges_to_the_sharp_law():
     errors = []
     for width in (1e-5, 1e-6, 1e-7):
         vx, vy = np.zeros_like(f), np.zeros_like(f)
-        coulomb_velocity(f, np.zeros_like(f), np.array([GAMMA, threshold, width]), vx, vy)
+        coulomb_velocity(
+            *shape(f.size), f, np.zeros_like(f), np.array([GAMMA, threshold, width]), vx, vy
+        )
         assert np.all(vy == 0.0)
         closed = np.sign(f) * regularised_speed(f, threshold, width)
         assert np.abs(vx - closed).max() <= 1e-12 * np.abs(closed).max()
@@ -161,18 +227,18 @@ def test_the_derivative_matches_differences_and_the_law_dissipates(fx, fy, thres
     c = np.array([GAMMA, threshold, width])
     f = np.array([[fx, fy]]).T.copy()
     v = [np.zeros(1), np.zeros(1)]
-    coulomb_velocity(f[0], f[1], c, *v)
+    coulomb_velocity(*shape(1), f[0], f[1], c, *v)
     assert v[0][0] * fx + v[1][0] * fy >= 0.0  # the law never feeds energy in
     d = [np.zeros(1) for _ in range(4)]
-    coulomb_derivative(f[0], f[1], c, *d)
+    coulomb_derivative(*shape(1), f[0], f[1], c, *d)
     h = 1e-4 * width
     for b in range(2):
         plus, minus = f.copy(), f.copy()
         plus[b] += h
         minus[b] -= h
         vp, vm = [np.zeros(1), np.zeros(1)], [np.zeros(1), np.zeros(1)]
-        coulomb_velocity(plus[0], plus[1], c, *vp)
-        coulomb_velocity(minus[0], minus[1], c, *vm)
+        coulomb_velocity(*shape(1), plus[0], plus[1], c, *vp)
+        coulomb_velocity(*shape(1), minus[0], minus[1], c, *vm)
         for a in range(2):
             fd = (vp[a][0] - vm[a][0]) / (2 * h)
             analytic = d[2 * a + b][0]

@@ -41,6 +41,29 @@ def force_field(fhat, scale, spec, field, fx, fy):
 
 
 @njit(**JIT)
+def shape_field(modes, spec, field, x, y, tx, ty):
+    """x, y (float64[M], cm): the membrane at the M points, from its modes ``modes``
+    (complex128[2 Lc + 1], cm); tx, ty (float64[M]): its unit tangent there, along
+    increasing xi. ``spec, field`` complex128[M] scratch."""
+    n = x.size
+    lc = (modes.size - 1) // 2
+    for part in range(2):
+        spec[:] = 0.0
+        for j in range(modes.size):
+            spec[(j - lc) % n] = modes[j] if part == 0 else 1j * (j - lc) * modes[j]
+        c2c(spec, field, AXES, False, 1.0, 1)
+        for i in range(n):
+            if part == 0:
+                x[i] = field[i].real
+                y[i] = field[i].imag
+            else:
+                speed = abs(field[i])
+                inv = 1.0 / speed if speed > 0.0 else 0.0
+                tx[i] = field[i].real * inv
+                ty[i] = field[i].imag * inv
+
+
+@njit(**JIT)
 def velocity_modes(vx, vy, spec, field, vhat):
     """vhat (complex128[2 Lc + 1], cm s^-1): the modes |k| <= Lc of the velocity vx, vy at
     the N points."""

@@ -32,7 +32,7 @@ _TAYLOR = 1e-5
 
 
 @njit(**JIT)
-def viscous_velocity(fx, fy, coefficients, vx, vy):
+def viscous_velocity(x, y, tx, ty, fx, fy, coefficients, vx, vy):
     inv = 1.0 / coefficients[0]
     for n in range(fx.size):
         vx[n] = fx[n] * inv
@@ -40,7 +40,7 @@ def viscous_velocity(fx, fy, coefficients, vx, vy):
 
 
 @njit(**JIT)
-def viscous_derivative(fx, fy, coefficients, dxx, dxy, dyx, dyy):
+def viscous_derivative(x, y, tx, ty, fx, fy, coefficients, dxx, dxy, dyx, dyy):
     inv = 1.0 / coefficients[0]
     for n in range(fx.size):
         dxx[n] = inv
@@ -73,7 +73,7 @@ def _ratio_and_slope(r, gamma, threshold, width):
 
 
 @njit(**JIT)
-def coulomb_velocity(fx, fy, coefficients, vx, vy):
+def coulomb_velocity(x, y, tx, ty, fx, fy, coefficients, vx, vy):
     gamma, threshold, width = coefficients[0], coefficients[1], coefficients[2]
     for n in range(fx.size):
         ratio, _ = _ratio_and_slope(math.hypot(fx[n], fy[n]), gamma, threshold, width)
@@ -82,7 +82,7 @@ def coulomb_velocity(fx, fy, coefficients, vx, vy):
 
 
 @njit(**JIT)
-def coulomb_derivative(fx, fy, coefficients, dxx, dxy, dyx, dyy):
+def coulomb_derivative(x, y, tx, ty, fx, fy, coefficients, dxx, dxy, dyx, dyy):
     # d v_a / d f_b = (g / r) delta_ab + (g' - g / r) f_a f_b / r^2
     gamma, threshold, width = coefficients[0], coefficients[1], coefficients[2]
     for n in range(fx.size):

@@ -278,11 +278,12 @@ class DrivingProtocol(Component):
 
 class FrictionLaw(Component):
     """How a membrane element moves under the force on it: a pointwise map from the force
-    density f (N cm^-1, per unit length of membrane) to the element's velocity v (cm s^-1)
-    (docs/model.md §3). The engine evaluates the force density of the cut-off modes at M
-    equally spaced points (the smallest power of two >= 8 Lc, at most N: 128 with the
-    defaults), applies the law there, and keeps the velocity's modes ``|k| <= Lc``, so
-    the shape stays band-limited whatever the law.
+    density f (N cm^-1, per unit length of membrane) to the element's velocity v (cm s^-1),
+    which may depend on where the element is and which way the membrane runs there (its
+    position and unit tangent; docs/model.md §3). The engine evaluates the force density of
+    the cut-off modes at M equally spaced points (the smallest power of two >= 8 Lc, at most
+    N: 128 with the defaults), applies the law there, and keeps the velocity's modes
+    ``|k| <= Lc``, so the shape stays band-limited whatever the law.
 
     The built-in ``viscous`` law, v = f / gamma_mem, is the paper's; it is ``linear``, and
     integrators then keep their direct path (the law's kernels are not called).
@@ -290,8 +291,8 @@ class FrictionLaw(Component):
 
     kind = "friction_law"
     kernels = {
-        "velocity_kernel": f"void({', '.join([VECTOR] * 5)})",
-        "derivative_kernel": f"void({', '.join([VECTOR] * 7)})",
+        "velocity_kernel": f"void({', '.join([VECTOR] * 9)})",
+        "derivative_kernel": f"void({', '.join([VECTOR] * 11)})",
     }
     #: True only for v = f / membrane_friction exactly (the built-in ``viscous``): integrators
     #: then move the modes by the force modes times 2 pi / (gamma_mem l0) (the paper's law).
@@ -303,11 +304,15 @@ class FrictionLaw(Component):
 
         Kernel signature::
 
-            kernel(fx, fy, coefficients, vx, vy) -> None
+            kernel(x, y, tx, ty, fx, fy, coefficients, vx, vy) -> None
 
-        ``fx, fy``: float64[M], the force density on the membrane at the M points (N cm^-1);
-        ``coefficients``: float64[:], from :meth:`Component.coefficients`. The kernel writes the
-        velocity (cm s^-1) into ``vx, vy`` (float64[M]). It must not allocate.
+        ``x, y``: float64[M], the membrane's points (cm), in the lab frame (the membrane
+        starts as a circle centred on the origin); ``tx, ty``: float64[M], its unit tangent
+        there, along increasing xi (counter-clockwise; the outward normal is (ty, -tx));
+        ``fx, fy``: float64[M], the force density on the membrane at those points
+        (N cm^-1); ``coefficients``: float64[:], from :meth:`Component.coefficients`. The
+        kernel writes the velocity (cm s^-1) into ``vx, vy`` (float64[M]). It must not
+        allocate. Point n is at xi_n = 2 pi n / M.
         """
 
     def derivative_kernel(self) -> Callable[..., None] | None:
@@ -315,12 +320,15 @@ class FrictionLaw(Component):
 
         Kernel signature::
 
-            kernel(fx, fy, coefficients, dxx, dxy, dyx, dyy) -> None
+            kernel(x, y, tx, ty, fx, fy, coefficients, dxx, dxy, dyx, dyy) -> None
 
         Arrays as in :meth:`velocity_kernel`; the kernel writes d v_a / d f_b
-        (cm^2 N^-1 s^-1) into ``dab`` (float64[M]) for a, b in x, y. Linearly implicit
-        integrators (``rodas4``) need it for their Jacobian. The default, None, selects the
-        documented fallback: central differences of :meth:`velocity_kernel` with the step
+        (cm^2 N^-1 s^-1) at fixed points and tangents into ``dab`` (float64[M]) for a, b in
+        x, y. Linearly implicit integrators (``rodas4``) need it for their Jacobian, which
+        holds the membrane's geometry fixed: how v changes with the points and tangents is
+        not in it, so a law that depends strongly on them costs ``rodas4`` smaller steps
+        (the error control still holds). The default, None, selects the documented
+        fallback: central differences of :meth:`velocity_kernel` with the step
         ``1e-6 (|f| + 1e-8 N/cm)`` per component.
         """
         return None

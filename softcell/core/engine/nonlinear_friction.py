@@ -17,6 +17,10 @@ LawWorkspace = namedtuple(
         "scale",
         "spec",
         "field",
+        "x",
+        "y",
+        "tx",
+        "ty",
         "fx",
         "fy",
         "vx",
@@ -56,6 +60,10 @@ def workspace(
         **{
             k: np.zeros(nodes)
             for k in (
+                "x",
+                "y",
+                "tx",
+                "ty",
                 "fx",
                 "fy",
                 "vx",
@@ -83,8 +91,8 @@ def workspace(
 
 def compiled_friction(law) -> ModuleType:
     """The module of ``templates/friction_modes.py`` for the friction law ``law`` (a
-    :class:`~softcell.core.components.contracts.FrictionLaw`): ``velocity(fhat, vhat,
-    lw)`` and ``jacobian(jac, lw)``, with ``lw`` from :func:`workspace`."""
+    :class:`~softcell.core.components.contracts.FrictionLaw`): ``velocity(modes, fhat,
+    vhat, lw)`` and ``jacobian(jac, lw)``, with ``lw`` from :func:`workspace`."""
     derivative = law.derivative_kernel()
     velocity = law.velocity_kernel()
     return compile_module(

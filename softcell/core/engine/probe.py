@@ -11,7 +11,6 @@ on its course, or that none is.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
@@ -31,20 +30,9 @@ DERIVATIVE_OUT = ("dxx", "dxy", "dyx", "dyy")
 
 def _curve(modes: np.ndarray, n: int) -> list[np.ndarray]:
     """x, y, x', y', x'', y'' (cm) at n equally spaced xi of the curve with these modes."""
-    lc = (modes.size - 1) // 2
-    k = np.arange(-lc, lc + 1)
-    out = []
-    for factor in (1, 1j * k, -(k * k)):
-        spectrum = np.zeros(n, dtype=np.complex128)
-        np.add.at(spectrum, k % n, factor * modes)
-        z = np.fft.ifft(spectrum) * n
-        out += [np.ascontiguousarray(z.real), np.ascontiguousarray(z.imag)]
-    return out
+    from softcell.core.engine.reference import _curve as curve
 
-
-def _friction_points(model: Model) -> int:
-    """M: the smallest power of two >= 8 Lc, at most N."""
-    return min(model.nodes, 1 << max(3, math.ceil(math.log2(8 * model.cutoff))))
+    return [np.ascontiguousarray(p) for z in curve(modes, n) for p in (z.real, z.imag)]
 
 
 def _evaluations(
@@ -104,22 +92,16 @@ def _evaluations(
 
 
 def _friction_evaluations(model: Model, modes: np.ndarray, pose: np.ndarray):
-    from softcell.core.engine.reference import force_modes
+    from softcell.core.engine.reference import law_inputs
 
     law = model.friction
-    m = _friction_points(model)
-    fhat, _ = force_modes(model, modes, pose)
-    lc = model.cutoff
-    k = np.arange(-lc, lc + 1)
-    spectrum = np.zeros(m, dtype=np.complex128)
-    np.add.at(spectrum, k % m, fhat)
-    f = np.fft.ifft(spectrum) * m * model.force_scale
-    fx, fy = np.ascontiguousarray(f.real), np.ascontiguousarray(f.imag)
+    inputs = law_inputs(model, modes, pose)
+    m = inputs[0].size
     coef = model.friction_coefficients
 
     def velocity():
         out = [np.zeros(m), np.zeros(m)]
-        law.velocity_kernel()(fx, fy, coef, *out)
+        law.velocity_kernel()(*inputs, coef, *out)
         return out
 
     yield law, "velocity_kernel", FRICTION_OUT, velocity
@@ -127,7 +109,7 @@ def _friction_evaluations(model: Model, modes: np.ndarray, pose: np.ndarray):
 
         def derivative():
             out = [np.zeros(m) for _ in range(4)]
-            law.derivative_kernel()(fx, fy, coef, *out)
+            law.derivative_kernel()(*inputs, coef, *out)
             return out
 
         yield law, "derivative_kernel", DERIVATIVE_OUT, derivative

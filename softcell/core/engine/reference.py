@@ -54,6 +54,25 @@ def force_modes(model: Model, modes: np.ndarray, pose: np.ndarray) -> tuple[np.n
     return -q[0] + 1j * k * q[1] + (k * k) * q[2], dpose
 
 
+def law_inputs(model: Model, modes: np.ndarray, pose: np.ndarray) -> list[np.ndarray]:
+    """What a friction law's kernels receive at this state, with numpy FFTs: the membrane's
+    points x, y (cm), unit tangents tx, ty and force density fx, fy (N cm^-1) at the M points
+    where integrators apply the law (:func:`~softcell.core.engine.nonlinear_friction.law_nodes`),
+    each float64[M]."""
+    from softcell.core.engine.nonlinear_friction import law_nodes
+
+    m = law_nodes(model.nodes, model.cutoff)
+    lc = model.cutoff
+    k = np.arange(-lc, lc + 1)
+    fhat, _ = force_modes(model, modes, pose)
+    spectrum = np.zeros(m, dtype=np.complex128)
+    np.add.at(spectrum, k % m, fhat)
+    f = np.fft.ifft(spectrum) * m * model.force_scale
+    z, zp, _ = _curve(modes, m)
+    t = zp / np.abs(zp)
+    return [np.ascontiguousarray(a) for a in (z.real, z.imag, t.real, t.imag, f.real, f.imag)]
+
+
 def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
     """E = (2 pi / N) sum_n e_n over all terms (N cm), from the terms' ``density``."""
     n = model.nodes

@@ -12,7 +12,7 @@ from softcell.config import JIT
 
 
 @njit(**JIT)
-def no_friction_velocity(fhat, vhat, lw):
+def no_friction_velocity(modes, fhat, vhat, lw):
     """Stands for a nonlinear friction law's velocity (the law is linear): does nothing."""
 
 

@@ -111,7 +111,7 @@ def segment(
                     has_q0 = True
             assemble(q0, q1, q2, has_q0, spec, fhat)
             if LAW:
-                friction_velocity(fhat, law.vhat, law)
+                friction_velocity(modes, fhat, law.vhat, law)
                 for j in range(modes.size):
                     fhat[j] = law.vhat[j]
         drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)

@@ -99,7 +99,7 @@ def rhs(u, phase, datum, out, problem, ws):
             lw = ws.law
             for j in range(m):
                 lw.fhat[j] = complex(out[j], out[m + j])
-            friction_velocity(lw.fhat, lw.vhat, lw)
+            friction_velocity(ws.modes, lw.fhat, lw.vhat, lw)
             for j in range(m):
                 out[j] = lw.vhat[j].real
                 out[m + j] = lw.vhat[j].imag

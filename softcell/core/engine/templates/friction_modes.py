@@ -9,7 +9,13 @@ the law's derivative kernel, is bound; otherwise central differences of ``law_ve
 
 from numba import njit
 
-from softcell.kernels.friction_modes import apply_to_rows, force_field, law_matrix, velocity_modes
+from softcell.kernels.friction_modes import (
+    apply_to_rows,
+    force_field,
+    law_matrix,
+    shape_field,
+    velocity_modes,
+)
 
 #: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
 #: or an extra binding is an error naming the template.
@@ -21,20 +27,25 @@ BOUND = (
 
 
 @njit(**JIT_FLAGS)
-def velocity(fhat, vhat, lw):
-    """vhat (cm s^-1): the velocity modes |k| <= Lc under the force modes ``fhat`` (N per unit
-    xi); leaves the force density in ``lw.fx, lw.fy`` for :func:`jacobian`."""
+def velocity(modes, fhat, vhat, lw):
+    """vhat (cm s^-1): the velocity modes |k| <= Lc of the membrane with modes ``modes`` (cm)
+    under the force modes ``fhat`` (N per unit xi); leaves the membrane's points and
+    tangents in ``lw.x, lw.y, lw.tx, lw.ty`` and the force density in ``lw.fx, lw.fy`` for
+    :func:`jacobian`."""
+    shape_field(modes, lw.spec, lw.field, lw.x, lw.y, lw.tx, lw.ty)
     force_field(fhat, lw.scale[0], lw.spec, lw.field, lw.fx, lw.fy)
-    law_velocity(lw.fx, lw.fy, lw.coefficients, lw.vx, lw.vy)
+    law_velocity(lw.x, lw.y, lw.tx, lw.ty, lw.fx, lw.fy, lw.coefficients, lw.vx, lw.vy)
     velocity_modes(lw.vx, lw.vy, lw.spec, lw.field, vhat)
 
 
 @njit(**JIT_FLAGS)
 def derivative(lw):
+    """d v / d f at the force density in ``lw.fx, lw.fy`` (the membrane held where
+    :func:`velocity` left it) into ``lw.dxx ... lw.dyy``."""
     coefficients = lw.coefficients
-    """d v / d f at the force density in ``lw.fx, lw.fy`` into ``lw.dxx ... lw.dyy``."""
+    x, y, tx, ty = lw.x, lw.y, lw.tx, lw.ty
     if ANALYTIC:
-        law_derivative(lw.fx, lw.fy, coefficients, lw.dxx, lw.dxy, lw.dyx, lw.dyy)
+        law_derivative(x, y, tx, ty, lw.fx, lw.fy, coefficients, lw.dxx, lw.dxy, lw.dyx, lw.dyy)
         return
     n = lw.fx.size
     for axis in range(2):
@@ -49,9 +60,11 @@ def derivative(lw):
                     h = 1e-6 * (abs(lw.fy[i]) + 1e-8)
                     lw.fy_step[i] += h if sign == 0 else -h
             if sign == 0:
-                law_velocity(lw.fx_step, lw.fy_step, coefficients, lw.vx_plus, lw.vy_plus)
+                law_velocity(
+                    x, y, tx, ty, lw.fx_step, lw.fy_step, coefficients, lw.vx_plus, lw.vy_plus
+                )
             else:
-                law_velocity(lw.fx_step, lw.fy_step, coefficients, lw.vx, lw.vy)
+                law_velocity(x, y, tx, ty, lw.fx_step, lw.fy_step, coefficients, lw.vx, lw.vy)
         for i in range(n):
             f = lw.fx[i] if axis == 0 else lw.fy[i]
             inv = 0.5 / (1e-6 * (abs(f) + 1e-8))
