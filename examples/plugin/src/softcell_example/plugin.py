@@ -5,6 +5,7 @@ hooks return component classes, never instances.
 """
 
 from softcell.plugin import hookimpl
+from softcell_example.anisotropic import Anisotropic
 from softcell_example.explicit_auto import ExplicitAuto
 from softcell_example.hysteresis import Hysteresis
 from softcell_example.pressure import Pressure
@@ -19,6 +20,11 @@ def softcell_energy_terms():
 @hookimpl
 def softcell_driving_protocols():
     return [RunAndReverse]
+
+
+@hookimpl
+def softcell_friction_laws():
+    return [Anisotropic]
 
 
 @hookimpl
