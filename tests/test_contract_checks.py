@@ -106,7 +106,7 @@ def test_a_correct_energy_term_passes():
     [
         (TwiceTether, "de/dx differs from central differences of density()"),
         (ReadsSlope, "derivative_order = 0, but the density or the partials depend on x'"),
-        (FeelsTheBot, "couples_bot is False, but the density or dpose depend on x_bot"),
+        (FeelsTheBot, "reads_pose is False, but the density or dpose depend on x_bot"),
         (WrongHessian, "hessian_kernel(): hww differs from central differences"),
     ],
 )

@@ -197,7 +197,7 @@ def velocity_nan(x, y, tx, ty, fx, fy, coefficients, vx, vy):
 class NanTerm(ShortTerm):
     name = "nan_term"
     description = "a partials kernel that writes NaN (a test)"
-    couples_bot = True
+    reads_pose = True
 
     def partials_kernel(self):
         return partials_nan

@@ -39,7 +39,7 @@ ALLOWED = {
     "core": {"config", "errors", "_version", "kernels", "core"},
     "plugins": {"config", "errors", "_version", "kernels", "core", "plugins"},
     "io": {"config", "errors", "_version", "kernels", "core", "io"},
-    "plugin": {"config", "errors", "_version", "kernels", "core", "plugins"},
+    "plugin": {"config", "errors", "_version", "kernels", "core", "plugins", "plugin"},
     "workflows": {"config", "errors", "_version", "kernels", "core", "plugins", "io", "workflows"},
 }
 

@@ -1,4 +1,5 @@
-"""The public plugin API: one module, ``softcell.plugin``, is all a plugin author imports."""
+"""The public plugin API: ``softcell.plugin`` (the contracts) and ``softcell.plugin.blocks``
+(what to build on) are all a plugin author imports."""
 
 import ast
 import re
@@ -44,9 +45,8 @@ SOURCES += [
 
 @pytest.mark.parametrize("where, source", SOURCES, ids=[w for w, _ in SOURCES])
 def test_plugin_code_imports_only_softcell_plugin(where, source):
-    wrong = [
-        line for line in softcell_imports(source, where) if not line.endswith(" softcell.plugin")
-    ]
+    public = (" softcell.plugin", " softcell.plugin.blocks")
+    wrong = [line for line in softcell_imports(source, where) if not line.endswith(public)]
     assert not wrong, "\n".join(wrong)
 
 
@@ -67,9 +67,9 @@ def test_the_api_holds_every_contract_and_what_it_promises():
         "ParameterError",
         "PHASE_RUN",
         "PHASE_TUMBLE",
-        "RunAndTumble",
-        "run_and_tumble_drive",
+        "registered",
     } <= names
+    assert len(names) == 22  # the contracts, parameters, codes and registration: no more
     for name in names:
         assert hasattr(softcell.plugin, name), name
         value = getattr(softcell.plugin, name)
@@ -96,3 +96,35 @@ def test_the_docs_example_protocol_runs():
     )
     with softcell.plugin.registered(plugin) as registry:
         assert registry.get("driving_protocol", "flicker") is namespace["Flicker"]
+
+
+def test_the_building_blocks_moved_and_the_old_names_warn():
+    import softcell.plugin.blocks as blocks
+
+    for name in softcell.plugin.MOVED:
+        assert name in blocks.__all__ and name not in softcell.plugin.__all__
+        with pytest.warns(DeprecationWarning, match=f"softcell.plugin.{name} moved to"):
+            assert getattr(softcell.plugin, name) is getattr(blocks, name)
+    with pytest.warns(DeprecationWarning):
+        from softcell.plugin import RunAndTumble  # noqa: F401
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        softcell.plugin.nothing  # noqa: B018
+
+
+def test_the_renamed_energy_term_attributes_still_work_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="couples_bot was renamed reads_pose"):
+
+        class Old(softcell.plugin.EnergyTerm):
+            couples_bot = True
+            acts_on_bot = True
+
+    assert Old.reads_pose and Old.has_bot_energy
+
+
+def test_a_run_configuration_naming_some_kinds_takes_the_defaults_for_the_others():
+    from softcell.core.components.registry import default_registry
+    from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
+
+    config = RunConfig(components={"integrator": "explicit_euler"})
+    assert config.components == {**DEFAULT_COMPONENTS, "integrator": "explicit_euler"}
+    config.check_components(default_registry())

@@ -181,3 +181,16 @@ def test_the_registry_knows_its_components_parameters_and_parameters_look_nothin
             registry.parameters({"fake_levl": 2.0})
         with pytest.raises(ConfigError, match="unknown parameter 'fake_level'"):
             Parameters({"fake_level": 2.0})  # a value object: it never reaches for a registry
+
+
+def test_a_plugin_both_installed_and_registered_in_a_test_counts_once(tmp_path, monkeypatch):
+    import warnings
+
+    import fakeplugins.good
+
+    fake_entry_points(tmp_path, monkeypatch, good="good")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no 'skipped' warning, no duplicate
+        with registered(fakeplugins.good) as registry:
+            assert registry.names("stopgo_detector") == ["fake_hysteresis", "threshold"]
+            assert registry.skipped == []

@@ -50,13 +50,18 @@ SECTIONS = ("parameters", "components", "run", "analysis")
 
 @dataclass(frozen=True)
 class RunConfig:
-    """Parameter values (a list value is a sweep), component names by kind, run settings,
-    and analysis options (validated by the analysis)."""
+    """Parameter values (a list value is a sweep), component names by kind (a kind not named
+    takes its default, :data:`DEFAULT_COMPONENTS`), run settings, and analysis options
+    (validated by the analysis)."""
 
     parameters: dict[str, Any] = field(default_factory=dict)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
     run: dict[str, Any] = field(default_factory=dict)
     analysis: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        # A kind not named takes its default: RunConfig(components={"integrator": "x"}).
+        object.__setattr__(self, "components", {**DEFAULT_COMPONENTS, **self.components})
 
     def updated(
         self,

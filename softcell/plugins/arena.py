@@ -120,7 +120,7 @@ class Arena(EnergyTerm):
         MODEL_PARAMETERS["contact_length"],
     )
     derivative_order = 0
-    acts_on_bot = True
+    has_bot_energy = True
 
     @classmethod
     def check(cls, params):

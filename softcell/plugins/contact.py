@@ -117,7 +117,7 @@ class Contact(EnergyTerm):
     description = "bot-membrane repulsion (l0/2pi) A exp(-rho/lambda) (SI:EQ:Eint)"
     parameters = (MODEL_PARAMETERS["contact_amplitude"], MODEL_PARAMETERS["contact_length"])
     derivative_order = 0
-    couples_bot = True
+    reads_pose = True
 
     def partials_kernel(self):
         return contact_partials

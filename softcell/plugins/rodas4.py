@@ -223,7 +223,7 @@ def _group(terms: list, coarse: bool) -> _Group:
         },
         _names(terms),
     )
-    has_bot = any(t.acts_on_bot for t in terms)
+    has_bot = any(t.has_bot_energy for t in terms)
     bot_forces, bot_hessians = (
         compose_bot(terms) if has_bot else (stubs.no_bot_forces, stubs.no_bot_hessians)
     )

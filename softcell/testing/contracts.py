@@ -6,7 +6,7 @@ are, and raises one :class:`AssertionError` listing every violation (nothing whe
 component keeps its contract):
 
 - :func:`check_energy_term`: the partials against central differences of the density, the
-  partials beyond ``derivative_order`` and the pose partials against ``couples_bot``, the
+  partials beyond ``derivative_order`` and the pose partials against ``reads_pose``, the
   Hessian kernels against differences of the partials and of the bot kernel (a gradient's
   derivative is symmetric, which the bot kernel's differences must be too).
 - :func:`check_friction_law`: finite velocities that never feed energy in (f . v >= 0), the
@@ -190,10 +190,10 @@ def _partials_against_density(cls, density, w, pose, parts, dpose, radius, rtol)
         plus[c] += h
         minus[c] -= h
         fd = float(np.sum(density(w, plus) - density(w, minus)) / (2 * h))
-        if not cls.couples_bot:
+        if not cls.reads_pose:
             if dpose[c] != 0.0 or abs(fd) > rtol * max(np.abs(parts).max(), 1e-300) * radius:
                 problems.append(
-                    f"couples_bot is False, but the density or dpose depend on {POSE_NAMES[c]}"
+                    f"reads_pose is False, but the density or dpose depend on {POSE_NAMES[c]}"
                 )
             continue
         ok, worst = _close(np.array([dpose[c]]), np.array([fd]), rtol, np.abs(dpose).max())
@@ -240,8 +240,8 @@ def _hessian_against_partials(term, hessian, w, pose, context, coef, radius, rto
 
 def _bot_kernels(term, pose, context, coef, radius, rtol) -> list[str]:
     kernel = term.bot_kernel()
-    if term.acts_on_bot and kernel is None:
-        return ["acts_on_bot is True, but bot_kernel() returns None"]
+    if term.has_bot_energy and kernel is None:
+        return ["has_bot_energy is True, but bot_kernel() returns None"]
     if kernel is None:
         return []
 

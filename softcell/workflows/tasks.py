@@ -98,7 +98,7 @@ def stored_components(
     stored = {**components, "membrane": membrane}
     if not membrane:
         names: Iterable[str] = components.get("energy_terms", [])
-        stored["energy_terms"] = [n for n in names if registry.get("energy_term", n).acts_on_bot]
+        stored["energy_terms"] = [n for n in names if registry.get("energy_term", n).has_bot_energy]
     return stored
 
 

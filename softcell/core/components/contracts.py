@@ -10,6 +10,7 @@ Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
 from __future__ import annotations
 
 import re
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,6 +22,7 @@ from softcell.core.params import ParameterSpec, unit_problem
 from softcell.errors import ContractError
 
 if TYPE_CHECKING:
+    from softcell.core.engine.model import Model
     from softcell.core.params import Parameters
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -100,6 +102,11 @@ class Component(ABC):
         return problems
 
 
+#: Energy-term attributes renamed in softcell 0.3 (old: new); the old names still work, with a
+#: DeprecationWarning, until 0.4.
+RENAMED = {"couples_bot": "reads_pose", "acts_on_bot": "has_bot_energy"}
+
+
 class EnergyTerm(Component):
     """A membrane energy density and its pointwise partial derivatives (SI:EQ:Eel, Est, Eint).
 
@@ -118,7 +125,7 @@ class EnergyTerm(Component):
         "bot_hessian_kernel": f"void({', '.join([VECTOR] * 3)}, float64[:, ::1])",
     }
     #: True if the density depends on the bot's pose (then the kernel fills ``dpose``).
-    couples_bot: ClassVar[bool] = False
+    reads_pose: ClassVar[bool] = False
     #: True if the density is a smooth function of gamma, gamma', gamma'' with no length
     #: scale of its own (bending, tension): its force modes ``|k| <= Lc`` are then computed to
     #: rounding on a coarser grid, and integrators other than the explicit reference may do
@@ -130,7 +137,20 @@ class EnergyTerm(Component):
     derivative_order: ClassVar[int] = 2
     #: True if the term also has an energy of the bot alone (:meth:`bot_kernel`, which must
     #: then return a kernel): such terms act on a free bot too.
-    acts_on_bot: ClassVar[bool] = False
+    has_bot_energy: ClassVar[bool] = False
+
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        super().__init_subclass__(**kwargs)
+        for old, new in RENAMED.items():
+            if old in cls.__dict__:
+                warnings.warn(
+                    f"{cls.__qualname__}.{old} was renamed {new} in softcell 0.3; set {new} "
+                    "(the old name is read until 0.4)",
+                    DeprecationWarning,
+                    stacklevel=2,
+                )
+                if new not in cls.__dict__:
+                    setattr(cls, new, cls.__dict__[old])
 
     @abstractmethod
     def partials_kernel(self) -> Callable[..., None]:
@@ -146,7 +166,7 @@ class EnergyTerm(Component):
         bot's x, y (cm) and heading (rad). ``context``: float64[3], l0 (cm), the bot's semi-major
         and semi-minor axes (cm). ``coefficients``: float64[:], from :meth:`Component.coefficients`.
         The kernel *adds* de/dx, de/dy (N) into ``p0x, p0y``, de/dx', de/dy' (N) into
-        ``p1x, p1y``, de/dx'', de/dy'' (N) into ``p2x, p2y``, and, if ``couples_bot``,
+        ``p1x, p1y``, de/dx'', de/dy'' (N) into ``p2x, p2y``, and, if ``reads_pose``,
         the sum over n of de_n/d(x_bot, y_bot, theta_bot) (N, N, N cm) into ``dpose[0:3]``.
         It must not allocate on the heap and must leave the other entries alone.
         """
@@ -340,12 +360,12 @@ class Integrator(Component):
     kind = "integrator"
 
     @abstractmethod
-    def build(self, model: object) -> Callable[..., object]:
-        """Compose the model's compiled kernels into a compiled stepper.
+    def build(self, model: Model) -> Stepper:
+        """Compose the model's compiled kernels into a stepper.
 
-        ``model`` is the engine's compiled model (``softcell.core.engine``); the returned
-        callable advances the state from one sample time (s) to the next. The exact
-        signatures are documented in ``docs/plugins.md``.
+        ``model`` (:class:`softcell.plugin.Model`) is the compiled model of one parameter
+        point; the returned :class:`Stepper` advances a realization's state from one sample
+        time (s) to the next (``docs/plugins.md``, "class Integrator").
         """
 
 

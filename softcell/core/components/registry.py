@@ -174,7 +174,10 @@ class Registry:
         distname = f"distribution {dist.name} {dist.version}" if dist else "an unknown distribution"
         origin = f"{distname} (entry point {ep.name} = {ep.value})"
         try:
-            self._register(ep.name, ep.load(), origin)
+            plugin = ep.load()
+            if self.pm.is_registered(plugin):  # also given to registered() (a test)
+                return
+            self._register(ep.name, plugin, origin)
             self.pm.check_pending()  # a misspelt hook name is an error, not a silent no-op
         except Exception as exc:  # a broken plugin must not take softcell down
             if self.pm.has_plugin(ep.name):

@@ -85,11 +85,24 @@ class Model:
     @property
     def bot_terms(self) -> list[EnergyTerm]:
         """The terms with an energy of the bot alone (:meth:`EnergyTerm.bot_kernel`)."""
-        return [t for t in self.terms if t.acts_on_bot]
+        return [t for t in self.terms if t.has_bot_energy]
+
+    @property
+    def reads_pose(self) -> bool:
+        """True if any term's density depends on the bot's pose."""
+        return any(t.reads_pose for t in self.terms)
 
     @property
     def couples_bot(self) -> bool:
-        return any(t.couples_bot for t in self.terms)
+        """Deprecated name of :attr:`reads_pose` (until softcell 0.4)."""
+        import warnings
+
+        warnings.warn(
+            "Model.couples_bot was renamed Model.reads_pose in softcell 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.reads_pose
 
     @property
     def nonlinear_friction(self) -> bool:
@@ -139,7 +152,7 @@ def build_model(
     """
     terms = [registry.get("energy_term", n)(params) for n in energy_terms]
     if not membrane:
-        terms = [t for t in terms if t.acts_on_bot]
+        terms = [t for t in terms if t.has_bot_energy]
     drive = registry.get("driving_protocol", protocol)(params)
     friction: FrictionLaw = registry.get("friction_law", friction_law)(params)
     origins = {

@@ -6,13 +6,8 @@ to return a ``Stepper`` from ``build(model)``.
 
 import math
 
-from softcell.plugin import (
-    ExplicitEulerStepper,
-    Integrator,
-    ParameterError,
-    ParameterSpec,
-    explicit_decay_rate,
-)
+from softcell.plugin import Integrator, ParameterError, ParameterSpec
+from softcell.plugin.blocks import ExplicitEulerStepper, explicit_decay_rate
 
 SAFETY = ParameterSpec(
     "stability_fraction",

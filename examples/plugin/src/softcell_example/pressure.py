@@ -51,7 +51,7 @@ class Pressure(EnergyTerm):
     name = "pressure"
     description = "2D pressure P inflating the membrane: E = -P * enclosed area"
     parameters = (PRESSURE,)
-    couples_bot = False
+    reads_pose = False
     smooth = True  # no length scale of its own: rodas4 may use its coarse grid
     derivative_order = 1  # reads gamma and gamma' only
 
