@@ -322,3 +322,41 @@ def test_analyze_takes_detector_parameters_as_options(example, hysteresis_run):
         "go_above": 0.3,
         "stop_below": 0.1,
     }
+
+
+@pytest.mark.parametrize(
+    ("kind", "name"),
+    [
+        ("energy_term", "pressure"),
+        ("driving_protocol", "run_and_reverse"),
+        ("friction_law", "anisotropic"),
+        ("stopgo_detector", "hysteresis"),
+    ],
+)
+def test_every_example_component_keeps_its_contract(example, kind, name):
+    from softcell.testing import check_component
+
+    with example():
+        cls = default_registry().get(kind, name)
+    check_component(cls)
+    if kind == "stopgo_detector":  # its own thresholds, below the planted stop and go
+        check_component(cls, {"go_above": 1.0, "stop_below": 0.5})
+
+
+def test_anisotropic_friction_with_equal_frictions_is_the_viscous_law(example, tmp_path):
+    # Along = across: the law is v = f / gamma_mem at every point, which the engine applies
+    # through its general path (points, tangents, force density at M points) instead of the
+    # viscous law's direct one. The two runs agree to rounding.
+    from softcell.core.runconfig import RunConfig
+    from softcell.workflows.ensemble import simulate
+
+    coarse = {"radius": 4.0, "duration": 0.2, "cutoff": 4, "nodes": 64, "stored_nodes": 16}
+    runs = {}
+    with example():
+        for law, extra in (("viscous", {}), ("anisotropic", {"friction_along": 3.42e-4})):
+            config = RunConfig(parameters={**coarse, "dt": 1e-5, **extra}).updated(
+                components={"friction_law": law, "integrator": "explicit_euler"}
+            )
+            runs[law] = xr.open_dataset(simulate(config, tmp_path / law, progress=False)[0])
+    for name in ("bot_x", "bot_y", "membrane_x", "membrane_y"):
+        np.testing.assert_allclose(runs["anisotropic"][name], runs["viscous"][name], atol=1e-9)
