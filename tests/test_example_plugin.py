@@ -75,7 +75,7 @@ def example(site):
 
 def test_installed_distribution_registers_one_component_of_each_kind(site, tmp_path):
     listing = softcell_cli(site, "plugins", cwd=tmp_path)
-    for name in ("pressure", "run_and_reverse", "explicit_auto", "hysteresis"):
+    for name in ("pressure", "run_and_reverse", "anisotropic", "explicit_auto", "hysteresis"):
         block = listing.split(f"    {name}:")[1].split("\n    ")[0:2]
         assert block[1].strip() == (
             "origin: distribution softcell-example 1.0.0 "

@@ -51,7 +51,7 @@ SECTIONS = ("parameters", "components", "run", "analysis")
 @dataclass(frozen=True)
 class RunConfig:
     """Parameter values (a list value is a sweep), component names by kind (a kind not named
-    takes its default, :data:`DEFAULT_COMPONENTS`), run settings, and analysis options
+    takes its default, ``DEFAULT_COMPONENTS``), run settings, and analysis options
     (validated by the analysis)."""
 
     parameters: dict[str, Any] = field(default_factory=dict)

@@ -26,7 +26,7 @@ Registration
 
 Building blocks (built-in protocols and kernels to reuse, the explicit stepper, the compiled
 module loader) are in :mod:`softcell.plugin.blocks`; the checks of a component against its
-contract, for a plugin's tests, in :mod:`softcell.testing`.
+contract, for a plugin's tests, in ``softcell.testing``.
 """
 
 from __future__ import annotations

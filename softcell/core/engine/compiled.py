@@ -295,7 +295,7 @@ def compile_module(
     module
         Loaded once per process and key. When a bound function cannot be identified (a
         closure, a function typed in a notebook), the module is compiled in memory instead,
-        with a :class:`~softcell.plugin.CacheWarning` saying why.
+        with a :class:`~softcell.plugin.blocks.CacheWarning` saying why.
     """
     check_bindings(label, source, bindings)
     try:

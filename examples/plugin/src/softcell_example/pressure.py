@@ -21,7 +21,7 @@ PRESSURE = ParameterSpec(
 )
 
 
-@njit(nogil=True)
+@njit(nogil=True, cache=True)
 def pressure_partials(
     x, y, xp, yp, xpp, ypp, pose, context, coefficients, p0x, p0y, p1x, p1y, p2x, p2y, dpose
 ):
@@ -33,7 +33,7 @@ def pressure_partials(
         p1y[n] -= half * x[n]
 
 
-@njit(nogil=True)
+@njit(nogil=True, cache=True)
 def pressure_hessian(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hwp, hpp):
     # w = (x, y, x', y', x'', y''): the only second derivatives are d2e/dx dy' = -P/2 and
     # d2e/dy dx' = +P/2 (and their symmetric entries).

@@ -12,7 +12,7 @@ from softcell.plugin import MODEL_PARAMETERS, PHASE_RUN, PHASE_TUMBLE, DrivingPr
 RUN, TUMBLE = PHASE_RUN, PHASE_TUMBLE  # the bot_phase flag values (numba reads globals)
 
 
-@njit(nogil=True)
+@njit(nogil=True, cache=True)
 def run_and_reverse_drive(phase, data, pose, context, coefficients, out):
     # data: +1 forward / -1 backward for a run, the turn sign for a tumble.
     if phase == RUN:
