@@ -5,17 +5,20 @@ evaluates its kernels on a generic state, compares them with what the contract s
 are, and raises one :class:`AssertionError` listing every violation (nothing when the
 component keeps its contract):
 
-- :func:`~softcell.testing.check_energy_term`: the partials against central differences of the density, the
-  partials beyond ``derivative_order`` and the pose partials against ``reads_pose``, the
-  Hessian kernels against differences of the partials and of the bot kernel (a gradient's
-  derivative is symmetric, which the bot kernel's differences must be too).
-- :func:`~softcell.testing.check_friction_law`: finite velocities that never feed energy in (f . v >= 0), the
-  derivative against differences of the velocity, a ``linear`` law being v = f / gamma_mem.
-- :func:`~softcell.testing.check_driving_protocol`: a schedule covering the duration, a finite heading, a
-  finite drive in every phase the schedule uses, and a drive smooth enough in the pose for
-  the central differences ``rodas4`` takes of it (two step sizes agree).
-- :func:`~softcell.testing.check_stopgo_detector`: labels on a planted series (long go and stop stretches and
-  missing samples) of the contract's shape, type and codes.
+- :func:`~softcell.testing.check_energy_term`: the partials against central differences of
+  the density, the partials beyond ``derivative_order`` and the pose partials against
+  ``reads_pose``, the Hessian kernels against differences of the partials and of the bot
+  kernel (a gradient's derivative is symmetric, which the bot kernel's differences must be
+  too).
+- :func:`~softcell.testing.check_friction_law`: finite velocities that never feed energy in
+  (f . v >= 0), the derivative against differences of the velocity, a ``linear`` law being
+  v = f / gamma_mem.
+- :func:`~softcell.testing.check_driving_protocol`: a schedule covering the duration, a
+  finite heading, a finite drive in every phase the schedule uses, and a drive smooth
+  enough in the pose for the central differences ``rodas4`` takes of it (two step sizes
+  agree).
+- :func:`~softcell.testing.check_stopgo_detector`: labels on a planted series (long go and
+  stop stretches and missing samples) of the contract's shape, type and codes.
 - :func:`~softcell.testing.check_component`: the check of the component's kind.
 
 Example (in a plugin's tests)::
@@ -509,9 +512,11 @@ CHECKS: dict[type, Callable[..., None]] = {
 
 
 def check_component(cls: type, values: Mapping[str, Any] | None = None, **options: Any) -> None:
-    """The check of ``cls``'s kind (:func:`~softcell.testing.check_energy_term`, :func:`~softcell.testing.check_friction_law`,
-    :func:`~softcell.testing.check_driving_protocol`, :func:`~softcell.testing.check_stopgo_detector`) with parameter ``values``
-    and that check's keyword ``options``.
+    """The check of ``cls``'s kind with parameter ``values`` (each in its declared unit) and
+    that check's keyword ``options``: :func:`~softcell.testing.check_energy_term`,
+    :func:`~softcell.testing.check_friction_law`,
+    :func:`~softcell.testing.check_driving_protocol` or
+    :func:`~softcell.testing.check_stopgo_detector`.
 
     Raises
     ------
