@@ -91,6 +91,7 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
     """The parameters beyond the model's that ``components`` (kind -> name or names; None for
     every registered component) declare, by name, each with the first component declaring it
     (``"integrator 'rodas4'"``)."""
+    from softcell.core.components.contracts import kind_name
     from softcell.core.components.registry import chosen, default_registry
 
     registry = default_registry()
@@ -100,9 +101,7 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
         if components is None or chosen(cls, components):
             for spec in cls.parameters:
                 if spec.name not in MODEL_PARAMETERS:
-                    found.setdefault(
-                        spec.name, (spec, f"{cls.kind.replace('_', ' ')} {cls.name!r}")
-                    )
+                    found.setdefault(spec.name, (spec, f"{kind_name(cls.kind)} {cls.name!r}"))
     return found
 
 

@@ -392,7 +392,7 @@ def test_a_value_for_a_component_not_in_use_is_refused(tmp_path, capsys):
 
     with registered(fakeplugins.good):
         with pytest.raises(
-            ConfigError, match="'fake_level' belongs to stopgo detector 'fake_hysteresis'"
+            ConfigError, match="'fake_level' belongs to stop/go detector 'fake_hysteresis'"
         ):
             plan(
                 RunConfig(parameters={"fake_level": 2.0}),

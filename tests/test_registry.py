@@ -86,7 +86,7 @@ def test_a_component_whose_unit_is_no_unit_is_skipped_alone(tmp_path, monkeypatc
     with pytest.warns(PluginWarning) as caught:
         registry = Registry(entry_points=eps)
     (message,) = [str(w.message) for w in caught]
-    assert "the stopgo detector Bananas of softcell plugin 'units'" in message
+    assert "the stop/go detector Bananas of softcell plugin 'units'" in message
     assert "softcell-fake 1.2" in message
     assert "parameter 'banana_level': unit 'bananas' does not parse as UDUNITS-2" in message
     assert "parameter 'blank_level': unit '' is not a UDUNITS-2 unit string" in message

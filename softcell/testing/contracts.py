@@ -43,6 +43,7 @@ from softcell.core.components.contracts import (
     EnergyTerm,
     FrictionLaw,
     StopGoDetector,
+    kind_name,
 )
 from softcell.core.params import Parameters
 from softcell.core.schema import GO, STOP, STOPGO_UNKNOWN
@@ -67,7 +68,7 @@ def _build(cls: type, values: Mapping[str, Any] | None):
 def _fail(component: type, problems: list[str]) -> None:
     if problems:
         raise AssertionError(
-            f"{component.kind.replace('_', ' ')} {component.name!r} breaks its contract:\n- "
+            f"{kind_name(component.kind)} {component.name!r} breaks its contract:\n- "
             + "\n- ".join(problems)
         )
 

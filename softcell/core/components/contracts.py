@@ -30,6 +30,11 @@ _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 VECTOR = "float64[::1]"
 
 
+def kind_name(kind: str) -> str:
+    """A component kind as prose: ``"stop/go detector"``, ``"energy term"``."""
+    return "stop/go detector" if kind == "stopgo_detector" else kind.replace("_", " ")
+
+
 class Component(ABC):
     """Base of every component.
 
@@ -462,7 +467,7 @@ def check_kernels(component: Component, origin: str) -> None:
         kernel = getattr(component, method)()
         if kernel is None:
             continue
-        where = f"{origin}: {component.kind.replace('_', ' ')} {component.name!r}: {method}()"
+        where = f"{origin}: {kind_name(component.kind)} {component.name!r}: {method}()"
         if not callable(getattr(kernel, "compile", None)):
             raise ContractError(f"{where} returned {kernel!r}, not a numba.njit function")
         try:

@@ -25,7 +25,7 @@ from typing import Any
 import pluggy
 
 from softcell.core.components import hookspecs
-from softcell.core.components.contracts import CONTRACTS, Component
+from softcell.core.components.contracts import CONTRACTS, Component, kind_name
 from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec, merge_specs, suggest
 from softcell.errors import ConfigError, PluginWarning, RegistryError
 
@@ -219,7 +219,7 @@ class Registry:
                             plugin_name,
                             origin,
                             "; ".join(problems),
-                            f"the {kind.replace('_', ' ')} {cls.__qualname__}",
+                            f"the {kind_name(kind)} {cls.__qualname__}",
                         )
                         continue
                     other = components[kind].get(cls.name)
@@ -310,7 +310,7 @@ class Registry:
         beyond the model's own, or None."""
         for entry in self:
             if any(s.name == parameter for s in entry.component.parameters):
-                return f"{entry.component.kind.replace('_', ' ')} {entry.component.name!r}"
+                return f"{kind_name(entry.component.kind)} {entry.component.name!r}"
         return None
 
     def _in_use(self, components: Mapping[str, Any] | None) -> list[Registered]:

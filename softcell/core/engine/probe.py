@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from softcell.core.components.contracts import Component, Schedule
+from softcell.core.components.contracts import Component, Schedule, kind_name
 from softcell.errors import ContractError
 
 if TYPE_CHECKING:
@@ -138,7 +138,7 @@ def first_non_finite(
 
 
 def _who(model: Model, component: Component) -> str:
-    kind = component.kind.replace("_", " ")
+    kind = kind_name(component.kind)
     origin = model.origins.get(f"{component.kind} {component.name}", "unknown origin")
     return f"{origin}: {kind} {component.name!r}"
 
