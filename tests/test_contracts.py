@@ -256,7 +256,9 @@ def test_a_non_finite_kernel_is_named_before_any_step(tmp_path, capsys, flags, n
     assert not list(tmp_path.glob("*.nc")) and not list(tmp_path.glob(".*ckpt*"))
 
 
-@pytest.mark.parametrize("integrator", ["rodas4", "explicit_euler"])
+@pytest.mark.parametrize(
+    "integrator", [pytest.param("rodas4", marks=pytest.mark.slow), "explicit_euler"]
+)
 def test_a_kernel_that_goes_non_finite_later_is_named_when_the_run_fails(
     tmp_path, capsys, integrator
 ):

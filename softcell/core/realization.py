@@ -15,7 +15,7 @@ from typing import Protocol
 import numpy as np
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.components.contracts import Stepper
+from softcell.core.components.contracts import Schedule, Stepper
 from softcell.core.engine.model import Model
 from softcell.core.engine.probe import diagnose
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
@@ -107,13 +107,11 @@ def run_realization(
         )
 
     done, done_state = first, _copy_state(state)  # the last consistent point
-    filled = first  # samples recorded so far (finite or not)
+    record = Record(times, rec_modes, rec_pose, schedule.phase)
     try:
         for i in range(first, times.size, SAMPLES_PER_CALL):
             j = min(i + SAMPLES_PER_CALL, times.size)
-            rec_modes[i:j], rec_pose[i:j] = stepper.sample(state, schedule, times[i:j])
-            filled = j
-            check_state(state, model, label, times[i:j], rec_modes[i:j], rec_pose[i:j])
+            _sample_checked(model, stepper, state, schedule, record, slice(i, j), label)
             done, done_state = j, _copy_state(state)
             if progress:
                 progress(float(times[j - 1] - times[i - 1]))
@@ -122,16 +120,6 @@ def run_realization(
                 last_save = time.monotonic()
             if stop is not None and stop():
                 raise KeyboardInterrupt
-    except SimulationError as exc:
-        reached = stepper.current(state)  # a failed step may have run ahead of the samples
-        why = diagnose(
-            model,
-            np.append(times[:filled], reached[2]),
-            np.vstack([rec_modes[:filled], reached[0][None]]),
-            np.vstack([rec_pose[:filled], reached[1][None]]),
-            schedule,
-        )
-        raise SimulationError(f"{exc}; {why}") from None
     except KeyboardInterrupt:
         # The stepper may have been stopped half way through a chunk: save what is whole.
         if checkpoint is not None:
@@ -141,6 +129,38 @@ def run_realization(
             + ("; rerun the same command to resume" if checkpoint else "")
         ) from None
     return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
+
+
+def _sample_checked(
+    model: Model,
+    stepper: Stepper,
+    state: dict[str, np.ndarray],
+    schedule: Schedule,
+    record: Record,
+    chunk: slice,
+    label: object,
+) -> None:
+    """Sample ``chunk`` of ``record.times`` into the record and check it; a failure is
+    re-raised with :func:`~softcell.core.engine.probe.diagnose`'s finding appended."""
+    filled = chunk.start  # samples recorded so far (finite or not)
+    try:
+        record.modes[chunk], record.pose[chunk] = stepper.sample(
+            state, schedule, record.times[chunk]
+        )
+        filled = chunk.stop
+        check_state(
+            state, model, label, record.times[chunk], record.modes[chunk], record.pose[chunk]
+        )
+    except SimulationError as exc:
+        modes, pose, t = stepper.current(state)  # a failed step may run ahead of the samples
+        why = diagnose(
+            model,
+            np.append(record.times[:filled], t),
+            np.vstack([record.modes[:filled], modes[None]]),
+            np.vstack([record.pose[:filled], pose[None]]),
+            schedule,
+        )
+        raise SimulationError(f"{exc}; {why}") from None
 
 
 def _copy_state(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
