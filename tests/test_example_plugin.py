@@ -247,7 +247,8 @@ def hysteresis_run(site, tmp_path_factory):
     folder = tmp_path_factory.mktemp("hysteresis")
     (folder / "sim.toml").write_text(
         "[parameters]\ngo_above = 0.07\nradius = 5\nduration = 0.3\ncutoff = 4\n"
-        'nodes = 64\nstored_nodes = 16\n[components]\nstopgo_detector = "hysteresis"\n'
+        'nodes = 64\nstored_nodes = 16\ndt = 1e-5\n[components]\nstopgo_detector = "hysteresis"\n'
+        'integrator = "explicit_euler"\n'
         "[analysis]\ndiscard = 0.05\nstop_below = 0.01\n"
     )
     softcell_cli(site, "simulate", "sim.toml", "-o", "run", "--quiet", cwd=folder)
