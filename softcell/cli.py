@@ -223,11 +223,13 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
+    from softcell.core.limits import check_seed
     from softcell.core.schema import validate
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
     from softcell.io.render import parse_point, parse_size, render
 
+    check_seed(args.seed)  # before anything is read
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     ds = open_inputs([args.input])
     point = parse_point(args.point, "--point") if args.point else {}
@@ -859,6 +861,8 @@ def _cmd_cache(args: argparse.Namespace) -> int:
     from softcell.io import model_cache as compiled
 
     root = compiled.cache_dir()
+    if args.stale and args.action != "clear":
+        raise SoftcellError("--stale goes with 'clear': softcell cache clear --stale")
     if args.action == "clear":
         count = compiled.clear(root, stale_only=args.stale)
         print(f"removed {count} {'stale ' if args.stale else ''}entries from {root}")
@@ -877,6 +881,12 @@ def _cmd_cache(args: argparse.Namespace) -> int:
         "another softcell build or numba, numpy, Python version; 'softcell cache clear "
         "--stale' removes them)"
     )
+    strangers = compiled.foreign(root)
+    if strangers:
+        print(
+            f"not a cache: {len(strangers)} item(s) softcell did not make "
+            f"(e.g. {strangers[0].name}); 'cache clear' refuses this folder"
+        )
     for entry in found:
         mark = "  stale" if entry.stale else ""
         print(

@@ -271,3 +271,51 @@ def test_an_unwritable_cache_compiles_in_memory_with_a_warning(tmp_path, monkeyp
     with pytest.warns(CacheWarning, match="cannot write"):
         module = compiled.compile_module("test", SOURCE, {"kernel": _double, "OFFSET": 1.0})
     assert module.total(np.arange(4.0)) == 16.0
+
+
+def test_cache_clear_on_a_results_folder_removes_nothing(tmp_path, monkeypatch, capsys):
+    # $SOFTCELL_CACHE_DIR pointing at a user's results: nothing there is softcell's cache.
+    from softcell.cli import main
+
+    results = tmp_path / "results"
+    (results / "simulations").mkdir(parents=True)
+    (results / "simulations" / "point000_realization0000.nc").write_bytes(b"data")
+    (results / "figures").mkdir()
+    (results / "figures" / "fig2.png").write_bytes(b"png")
+    (results / "report.md").write_text("# report\n")
+    monkeypatch.setenv(model_cache.CACHE_ENV, str(results))
+    assert main(["cache"]) == 0
+    out = capsys.readouterr().out
+    assert "0 entries" in out and "not a cache: 3 item(s) softcell did not make" in out
+    assert main(["cache", "clear"]) == 2
+    err = capsys.readouterr().err
+    assert "is not a softcell cache: it holds 3 item(s) softcell did not make" in err
+    assert "nothing removed" in err
+    assert sorted(p.name for p in results.iterdir()) == ["figures", "report.md", "simulations"]
+    assert (results / "simulations" / "point000_realization0000.nc").read_bytes() == b"data"
+
+
+def test_cache_clear_says_what_it_could_not_remove(cache, capsys, monkeypatch):
+    from softcell.cli import main
+
+    _compile()
+    (entry,) = model_cache.entries(cache)
+    real = model_cache.shutil.rmtree
+
+    def refuse(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(model_cache.shutil, "rmtree", refuse)
+    assert main(["cache", "clear"]) == 2
+    err = capsys.readouterr().err
+    assert f"could not remove 1 of 1 entries from {cache}" in err
+    assert "PermissionError: Permission denied" in err and "0 removed" in err
+    monkeypatch.setattr(model_cache.shutil, "rmtree", real)
+    assert model_cache.entries(cache) == [entry]
+
+
+def test_stale_without_clear_is_refused(cache, capsys):
+    from softcell.cli import main
+
+    assert main(["cache", "--stale"]) == 2
+    assert "--stale goes with 'clear'" in capsys.readouterr().err

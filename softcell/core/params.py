@@ -17,6 +17,7 @@ import functools
 import itertools
 import json
 import math
+import numbers
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -83,7 +84,7 @@ class ParameterSpec:
     def coerce(self, value: Any) -> Value:
         """Convert ``value`` (from TOML, a flag or an attribute) to ``kind``, or raise."""
         bad = ParameterError(self.name, repr(value), self.allowed(), self.unit)
-        if isinstance(value, bool):
+        if isinstance(value, bool):  # numpy's bool is no numbers.Real: refused below
             raise bad
         if self.kind is str:
             if not isinstance(value, str):
@@ -94,7 +95,7 @@ class ParameterSpec:
                 value = float(value)
             except ValueError:
                 raise bad from None
-        if not isinstance(value, int | float):
+        if not isinstance(value, numbers.Real):  # numpy's scalars too (np.float32(8))
             raise bad
         if self.kind is int:
             if not float(value).is_integer():

@@ -198,8 +198,34 @@ def _meta(label: str, description: str) -> dict[str, str]:
     }
 
 
+def _marker(folder: Path) -> dict[str, str] | None:
+    """The entry marker (``entry.json``) softcell writes first into each entry it makes, or
+    None when ``folder`` has no valid one."""
+    try:
+        meta = json.loads((folder / "entry.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    # Entries of every softcell build since the cache exists carry a label and a date.
+    return meta if isinstance(meta, dict) and {"label", "created"} <= set(meta) else None
+
+
+def foreign(root: Path) -> list[Path]:
+    """What ``root`` holds that softcell did not make: files, and folders that are neither
+    an entry (a valid marker) nor empty."""
+    if not root.is_dir():
+        return []
+    found = []
+    for path in sorted(root.iterdir()):
+        if path.is_dir() and not path.is_symlink():
+            if _marker(path) is not None or not any(path.iterdir()):
+                continue
+        found.append(path)
+    return found
+
+
 def entries(root: Path | None = None) -> list[Entry]:
-    """The cache's entries, oldest first."""
+    """The cache's entries, oldest first: the folders with softcell's entry marker (anything
+    else in the folder is no entry, see :func:`foreign`)."""
     from softcell.core.engine.compiled import environment_key
 
     root = cache_dir() if root is None else root
@@ -207,18 +233,17 @@ def entries(root: Path | None = None) -> list[Entry]:
     if not root.is_dir():
         return out
     current = environment_key()
-    for folder in sorted(p for p in root.iterdir() if p.is_dir()):
-        try:
-            meta = json.loads((folder / "entry.json").read_text())
-        except (OSError, ValueError):
-            meta = {}
+    for folder in sorted(p for p in root.iterdir() if p.is_dir() and not p.is_symlink()):
+        meta = _marker(folder)
+        if meta is None:
+            continue
         size = sum(f.stat().st_size for f in folder.rglob("*") if f.is_file())
         out.append(
             Entry(
                 folder,
-                str(meta.get("label", "?")),
+                str(meta["label"]),
                 str(meta.get("description", "")),
-                str(meta.get("created", "?")),
+                str(meta["created"]),
                 size,
                 meta.get("environment") != current,
             )
@@ -228,9 +253,37 @@ def entries(root: Path | None = None) -> list[Entry]:
 
 def clear(root: Path | None = None, stale_only: bool = False) -> int:
     """Remove every entry (only the stale ones with ``stale_only``); return how many were
-    removed. Processes running from an entry keep what they loaded."""
+    removed. Processes running from an entry keep what they loaded.
+
+    Raises
+    ------
+    SoftcellError
+        Before removing anything, when ``root`` holds what softcell did not make (it is not
+        a cache: ``$SOFTCELL_CACHE_DIR`` pointing at a results folder); after trying, when
+        an entry could not be removed (a read-only cache), naming the first.
+    """
+    from softcell.errors import SoftcellError
+
     root = cache_dir() if root is None else root
+    strangers = foreign(root)
+    if strangers:
+        raise SoftcellError(
+            f"{root} is not a softcell cache: it holds {len(strangers)} item(s) softcell did "
+            f"not make (e.g. {strangers[0].name}); nothing removed (check "
+            f"${CACHE_ENV})"
+        )
     found = [e for e in entries(root) if e.stale or not stale_only]
+    failed: list[str] = []
     for entry in found:
-        shutil.rmtree(entry.path, ignore_errors=True)
+        try:
+            shutil.rmtree(entry.path)
+        except OSError as exc:
+            failed.append(f"{type(exc).__name__}: {exc.strerror or exc}")
+    left = [e for e in found if e.path.exists()]
+    if left:
+        why = failed[0] if failed else "it is still there"
+        raise SoftcellError(
+            f"could not remove {len(left)} of {len(found)} entries from {root} "
+            f"(first: {left[0].path.name}: {why}); {len(found) - len(left)} removed"
+        )
     return len(found)

@@ -21,7 +21,7 @@ import xarray as xr
 
 import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
-from softcell.errors import SoftcellError
+from softcell.errors import ConfigError, SoftcellError
 from softcell.io.files import atomic_write
 
 #: Keyword arguments that keep simulated time as plain seconds.
@@ -69,6 +69,8 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
         For a full disk, a read-only file system or a missing permission (one line); nothing
         is left under ``path`` nor beside it.
     """
+    if not isinstance(ds, xr.Dataset):
+        raise ConfigError(f"write_dataset: ds is a {type(ds).__name__}, not an xarray.Dataset")
     path = Path(path)
     ds = _to_cf(ds)
     with atomic_write(path) as tmp:

@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 import xarray as xr
 
+from softcell.core.limits import check_seed
 from softcell.core.schema import validate
 from softcell.core.tracking import Frame
 from softcell.errors import SoftcellError
@@ -116,12 +117,13 @@ def render(
         Gaussian noise (grey levels), Gaussian blur (px), and the relative amplitude of an
         uneven illumination (a gradient and a vignette).
     seed : int
-        Seed of the noise.
+        Seed of the noise (0 .. 2**64 - 1).
 
     Returns
     -------
     RenderInfo
     """
+    check_seed(seed)
     _check_render_arguments(
         px_per_cm=px_per_cm,
         fps=fps,

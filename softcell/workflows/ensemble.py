@@ -21,7 +21,7 @@ from softcell.core.components.registry import Registry, check_in_use, default_re
 from softcell.core.limits import check_run, check_seed
 from softcell.core.params import expand_sweep
 from softcell.core.runconfig import RunConfig
-from softcell.errors import SoftcellError
+from softcell.errors import ConfigError, SoftcellError
 from softcell.workflows.cluster import check_scheduler, cluster_client, run_on_cluster
 from softcell.workflows.resume import expected_bytes, resume_plan
 from softcell.workflows.tasks import STOP_FILE, Task, run_task, stored_components
@@ -193,6 +193,11 @@ def simulate(
     from softcell.io.files import check_output, check_writable, remove
 
     registry = registry if registry is not None else default_registry()
+    if not isinstance(config, RunConfig):
+        raise ConfigError(
+            f"simulate: config is a {type(config).__name__}, not a RunConfig; write "
+            "softcell.RunConfig(parameters={...}, components={...})"
+        )
     _check_execution(workers, scheduler, client, checkpoint_every)
     out = check_output(out, "simulation", directory=True)  # absolute: cluster workers too
     tasks = plan(

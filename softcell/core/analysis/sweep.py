@@ -33,7 +33,7 @@ from softcell.core.analysis.series import (
 from softcell.core.components.registry import Registry, default_registry
 from softcell.core.params import parameter_attrs
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
-from softcell.errors import SoftcellError
+from softcell.errors import ConfigError, SoftcellError
 
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
@@ -518,6 +518,11 @@ def analyze(
 
     tqdm = progress_bar_class()
 
+    if not isinstance(ds, xr.Dataset):
+        raise ConfigError(
+            f"analyze: ds is a {type(ds).__name__}, not an xarray.Dataset (open one with "
+            "softcell.open_dataset)"
+        )
     setup = _Setup(ds, options, registry if registry is not None else default_registry())
     res = _Results(setup, ds.sizes["realization"])
     radius = np.array([_radius(ds, p) for p in setup.points])
