@@ -155,8 +155,10 @@ def _cmd_params(args: argparse.Namespace) -> int:
     points = expand_sweep(
         config.parameters, list(registry.parameter_specs(config.components).values())
     )
+    integrator = registry.get("integrator", config.components["integrator"])
     for _, params in points:
         check_run(params)
+        integrator.check(params)  # the checks simulate makes, so params accepts no less
     _, first = points[0]
     swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
     width = max(len(n) for n in first)
@@ -476,6 +478,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     ipr, ipr_error = _numbers("--ipr", args.ipr), _numbers("--ipr-error", args.ipr_error)
     _check_calibration_request(args, radius, ipr)
     config = load_config(args.config) if args.config else RunConfig()
+    if args.workers is not None and args.workers < 1:
+        raise SoftcellError(f"--workers = {args.workers} is not allowed: must be >= 1")
     workers = args.workers or 1
     options = {"seed": args.seed, "workers": workers, "log": None if args.quiet else _note}
     results = []

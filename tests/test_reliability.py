@@ -102,3 +102,36 @@ def test_the_library_names_a_wrong_argument(tmp_path, call, words):
     with pytest.raises(ConfigError, match=words):
         call(tmp_path)
     assert not (tmp_path / "x.nc").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (
+            ["params", "--radius", "8,8"],
+            "parameter 'radius' is swept over ['8', '8'] with 8.0 twice",
+        ),
+        (["params", "--radius", "8,8.0"], "with 8.0 twice"),
+        (
+            ["params", "--integrator", "explicit_euler", "--dt", "1"],
+            "parameter dt = 1.0 s is not allowed: must divide sample_every = 0.01 s",
+        ),
+        (["calibrate", "--push-speed", "0.1", "--radius", "4", "--workers", "0"], "--workers = 0"),
+        (["study", "sensitivity", "-o", "S", "--only", ","], "names no variant to compare"),
+    ],
+)
+def test_requests_refused_before_computing(tmp_path, capsys, monkeypatch, argv, words):
+    monkeypatch.chdir(tmp_path)
+    line = one_line_exit_2(argv, capsys)
+    assert words in line, line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_output_reached_through_a_link_into_the_input_is_refused(tmp_path, capsys):
+    source = tmp_path / "run"
+    source.mkdir()
+    (source / "point000_realization0000.nc").write_bytes(b"")
+    (tmp_path / "link").symlink_to(source)
+    line = one_line_exit_2(["analyze", str(source), "-o", str(tmp_path / "link" / "an.nc")], capsys)
+    assert "is inside the input directory" in line
+    assert sorted(p.name for p in source.iterdir()) == ["point000_realization0000.nc"]

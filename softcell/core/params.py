@@ -475,6 +475,14 @@ def expand_sweep(
     for name, options in swept.items():
         if not options:
             raise ConfigError(f"parameter {name!r} is swept over an empty list")
+        spec = merge_specs(MODEL_PARAMETERS.values(), extra_specs).get(name)
+        seen = [spec.coerce(v) if spec is not None else v for v in options]
+        twice = next((v for v in seen if seen.count(v) > 1), None)
+        if twice is not None:
+            raise ConfigError(
+                f"parameter {name!r} is swept over {options} with {twice} twice: each value "
+                "is one parameter point (for more samples of a point, add realizations)"
+            )
     fixed = {k: v for k, v in values.items() if k not in swept}
     points = []
     for combo in itertools.product(*swept.values()):

@@ -232,7 +232,7 @@ def _check_apart_from_input(path: Path, source: Path, directory: bool, option: s
             f"{option} {path} is the input {source}: an output never "
             "replaces an input; choose another name"
         )
-    if source.is_dir() and _inside(path, source.resolve()):
+    if source.is_dir() and _inside(path.resolve(), source.resolve()):  # through links too
         raise SoftcellError(
             f"{option} {path} is inside the input directory {source}: an "
             "output there would be read as part of it; write it elsewhere"

@@ -92,6 +92,11 @@ SHORT_LAG = 0.1
 def variants_named(names: Sequence[str]) -> tuple[Variant, ...]:
     """The variants of :data:`VARIANTS` called ``names`` (``default`` always first)."""
     known = {v.name: v for v in VARIANTS}
+    if not [n for n in names if n != "default"]:
+        raise SoftcellError(
+            f"--only {','.join(names)!r} names no variant to compare with the default; the "
+            f"study's variants are {', '.join(n for n in known if n != 'default')}"
+        )
     bad = [n for n in names if n not in known]
     if bad:
         raise SoftcellError(
