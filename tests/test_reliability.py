@@ -135,3 +135,38 @@ def test_an_output_reached_through_a_link_into_the_input_is_refused(tmp_path, ca
     line = one_line_exit_2(["analyze", str(source), "-o", str(tmp_path / "link" / "an.nc")], capsys)
     assert "is inside the input directory" in line
     assert sorted(p.name for p in source.iterdir()) == ["point000_realization0000.nc"]
+
+
+COARSE = ["--cutoff", "4", "--nodes", "64", "--stored-nodes", "16", "--integrator",
+          "explicit_euler", "--dt", "1e-5", "--quiet"]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def two_sweeps(tmp_path_factory):
+    root = tmp_path_factory.mktemp("sweeps")
+    for name, extra in (("a", ["--seed", "3", "--duration", "0.3"]),
+                        ("b", ["--seed", "5", "--duration", "0.2"]),
+                        ("c", ["--seed", "3", "--duration", "0.2"])):  # fmt: skip
+        assert main(["simulate", "--radius", "4,5", *COARSE, *extra, "-o", str(root / name)]) == 0
+    return root
+
+
+@pytest.mark.parametrize(
+    ("pair", "words"),
+    [
+        (("a", "b"), "are not one sweep: softcell_seed = 3 there, 5 here"),
+        (("a", "c"), "parameter duration differs between them"),
+    ],
+)
+def test_unrelated_sweeps_are_not_merged(two_sweeps, tmp_path, capsys, pair, words):
+    inputs = [str(two_sweeps / p) for p in pair]
+    line = one_line_exit_2(["analyze", *inputs, "-o", str(tmp_path / "an.nc")], capsys)
+    assert words in line, line
+    assert not (tmp_path / "an.nc").exists()
+
+
+def test_one_sweep_still_combines(two_sweeps, tmp_path, capsys):
+    from softcell.io.netcdf import open_inputs
+
+    ds = open_inputs([two_sweeps / "a"])
+    assert ds.sizes["radius"] == 2

@@ -251,6 +251,34 @@ def _with_sweep_coordinates(
     return ds
 
 
+#: What every file of one sweep shares (global attributes).
+SHARED = ("softcell_origin", "softcell_seed", "softcell_components", "softcell_version")
+
+
+def _check_one_request(
+    parts: list[xr.Dataset], names: list[str], values: list[dict[str, Any]], swept: list[str]
+) -> None:
+    """Raise unless the parts are files of one request: the same origin, seed, components and
+    version, and, for files softcell simulated, parameters that differ only where their
+    request swept them (a swept parameter is a scalar coordinate of each file)."""
+    first = parts[0].attrs
+    for ds, name in zip(parts[1:], names[1:], strict=True):
+        for key in SHARED:
+            if key in first and key in ds.attrs and str(first[key]) != str(ds.attrs[key]):
+                raise SoftcellError(
+                    f"{names[0]} and {name} are not one sweep: {key} = {first[key]} there, "
+                    f"{ds.attrs[key]} here; analyse them separately"
+                )
+    for key in swept:
+        for ds, name, vals in zip(parts, names, values, strict=True):
+            if "softcell_spawn_key" in ds.attrs and key not in ds.coords:
+                raise SoftcellError(
+                    f"the inputs are not one sweep: parameter {key} differs between them "
+                    f"({name} has {vals.get(key)}), but no request swept it; analyse them "
+                    "separately"
+                )
+
+
 def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:
     """Combine per-(point, realization) Datasets into one, adding swept-parameter dims.
 
@@ -275,6 +303,7 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
     swept = [k for k in keys if len({json.dumps(v.get(k)) for v in values}) > 1]
     follows = _followers(swept, values)
     swept = [k for k in swept if k not in follows]
+    _check_one_request(parts, names, values, swept)
     units = json.loads(parts[0].attrs.get("softcell_parameter_units", "{}"))
     expanded = [
         _with_sweep_coordinates(ds, vals, swept, follows, units)
