@@ -170,3 +170,15 @@ def test_one_sweep_still_combines(two_sweeps, tmp_path, capsys):
 
     ds = open_inputs([two_sweeps / "a"])
     assert ds.sizes["radius"] == 2
+
+
+@pytest.mark.parametrize(
+    ("flags", "blamed"),
+    [(["--stored-nodes", "1e8"], "stored_nodes"), (["--duration", "1e9"], "duration")],
+)
+def test_a_realization_too_large_for_memory_blames_the_parameter_out_of_the_ordinary(
+    capsys, flags, blamed
+):
+    line = one_line_exit_2(["params", *flags], capsys)
+    assert line.startswith(f"softcell: error: parameter {blamed} = "), line
+    assert "of memory, more than 50% of this machine's" in line

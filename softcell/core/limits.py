@@ -83,6 +83,14 @@ def realization_bytes(params) -> dict[str, float]:
     }
 
 
+def _stored_nodes_to_blame(params) -> bool:
+    """Whether the stored points, rather than the duration, are the larger multiple of their
+    default (the samples' memory grows as the product of the two)."""
+    stored = float(params.stored_nodes) / float(params.specs["stored_nodes"].default)
+    typical = 900.0 if float(params.radius) < 10.0 else 1800.0  # the derived default
+    return stored > float(params.duration) / typical
+
+
 def check_run(params, memory: int | None = None) -> None:
     """Raise :class:`ParameterError` unless one realization of ``params`` fits in memory.
 
@@ -96,11 +104,13 @@ def check_run(params, memory: int | None = None) -> None:
     if total <= budget:
         return
     name = max(parts, key=parts.get)
+    room = budget - (total - parts[name])
+    if name == "duration" and _stored_nodes_to_blame(params):
+        name = "stored_nodes"  # the samples' size, not their number, is out of the ordinary
     spec = params.specs[name]
     value = float(params[name])
-    room = budget - (total - parts[name])
-    if name == "duration":
-        largest = value * max(room, 0.0) / parts[name]
+    if name in ("duration", "stored_nodes"):  # the samples' memory grows as each of them
+        largest = value * max(room, 0.0) / parts["duration"]
     elif name == "cutoff":
         largest = value * math.sqrt(max(room, 0.0) / parts[name])
     else:
