@@ -182,3 +182,12 @@ def test_a_realization_too_large_for_memory_blames_the_parameter_out_of_the_ordi
     line = one_line_exit_2(["params", *flags], capsys)
     assert line.startswith(f"softcell: error: parameter {blamed} = "), line
     assert "of memory, more than 50% of this machine's" in line
+
+
+def test_an_ensemble_that_cannot_fit_on_the_disk_is_refused_before_planning(tmp_path, capsys):
+    # Refused from the sizes alone: making 1e8 tasks first took minutes and the memory.
+    line = one_line_exit_2(
+        ["simulate", "--realizations", "100000000", "-o", str(tmp_path / "big")], capsys
+    )
+    assert "realizations = 100000000 x 1 parameter point(s) would write 100000000 files" in line
+    assert not (tmp_path / "big").exists()

@@ -77,6 +77,7 @@ def plan(
     for _, params in points:
         check_run(params)
         integrator.check(params)
+    _check_total(points, realizations, out)
     swept = tuple(
         dict.fromkeys(
             ["radius", *(k for k, v in config.parameters.items() if isinstance(v, list | tuple))]
@@ -98,6 +99,23 @@ def plan(
         for p, (_, params) in enumerate(points)
         for r in range(realizations)
     ]
+
+
+def _check_total(points: list, realizations: int, out: Path) -> None:
+    """Refuse, before a task is made, an ensemble whose files cannot fit on the disk of
+    ``out`` (counting the simulation files already there, which a rerun reuses)."""
+    from softcell.core.limits import file_bytes, human_bytes
+    from softcell.io.files import free_bytes
+
+    need = realizations * sum(file_bytes(params) for _, params in points)
+    have = sum(p.stat().st_size for p in Path(out).glob("*.nc")) if Path(out).is_dir() else 0
+    free = free_bytes(out)
+    if need > free + have:
+        raise SoftcellError(
+            f"realizations = {realizations} x {len(points)} parameter point(s) would write "
+            f"{realizations * len(points)} files, about {human_bytes(need)}, more than the "
+            f"{human_bytes(free)} free for {out}: ask for fewer realizations or points"
+        )
 
 
 def _check_execution(
