@@ -103,19 +103,13 @@ def plan(
 
 def _check_total(points: list, realizations: int, out: Path) -> None:
     """Refuse, before a task is made, an ensemble whose files cannot fit on the disk of
-    ``out`` (counting the simulation files already there, which a rerun reuses)."""
-    from softcell.core.limits import file_bytes, human_bytes
-    from softcell.io.files import free_bytes
+    ``out`` (the simulation files already there, which a rerun reuses, count as room)."""
+    from softcell.core.limits import file_bytes
+    from softcell.io.files import check_writable
 
     need = realizations * sum(file_bytes(params) for _, params in points)
     have = sum(p.stat().st_size for p in Path(out).glob("*.nc")) if Path(out).is_dir() else 0
-    free = free_bytes(out)
-    if need > free + have:
-        raise SoftcellError(
-            f"realizations = {realizations} x {len(points)} parameter point(s) would write "
-            f"{realizations * len(points)} files, about {human_bytes(need)}, more than the "
-            f"{human_bytes(free)} free for {out}: ask for fewer realizations or points"
-        )
+    check_writable(out, max(need - have, 0))
 
 
 def _check_execution(
