@@ -43,18 +43,11 @@ def site(tmp_path_factory):
 
 
 def softcell_cli(site, *args, cwd):
-    env = {
-        **os.environ,
-        "PYTHONPATH": os.pathsep.join([str(site), *filter(None, [os.environ.get("PYTHONPATH")])]),
-    }
-    return subprocess.run(
-        [sys.executable, "-m", "softcell", *map(str, args)],
-        cwd=cwd,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout
+    """``python -m softcell ARGS`` with the example installed; its standard output (a failure
+    raises)."""
+    done = run_cli(site, *args, cwd=cwd)
+    done.check_returncode()
+    return done.stdout
 
 
 @pytest.fixture(scope="module")

@@ -50,6 +50,7 @@ from softcell.core.engine.model import Model
 from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
 from softcell.core.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
 from softcell.errors import ContractError, ParameterError
+from softcell.plugin import blocks
 
 __all__ = [
     "GO",
@@ -78,23 +79,11 @@ __all__ = [
 
 #: Names that were here in softcell 0.2 and moved to :mod:`softcell.plugin.blocks` in 0.3;
 #: importing them from here still works, with a DeprecationWarning, until 0.4.
-MOVED = (
-    "CacheWarning",
-    "ExplicitEulerStepper",
-    "PivotRunAndTumble",
-    "RunAndTumble",
-    "alternating_schedule",
-    "compile_module",
-    "explicit_decay_rate",
-    "pivot_drive",
-    "run_and_tumble_drive",
-)
+MOVED = tuple(blocks.__all__)
 
 
 def __getattr__(name: str) -> Any:
     if name in MOVED:
-        from softcell.plugin import blocks
-
         warnings.warn(
             f"softcell.plugin.{name} moved to softcell.plugin.blocks in softcell 0.3; "
             "import it from there (the old place works until 0.4)",
