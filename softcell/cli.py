@@ -11,6 +11,7 @@ import atexit
 import json
 import math
 import os
+import signal
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -19,6 +20,7 @@ from typing import Any, NoReturn
 
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
+from softcell.core.interrupt import exit_status, received, stop_signals
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
 from softcell.core.runconfig import RunConfig
 from softcell.errors import CacheWarning, PluginWarning, SchemaError, SoftcellError
@@ -208,7 +210,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from softcell.core.analysis import analyze
     from softcell.io.files import check_output
-    from softcell.io.netcdf import open_inputs, write_dataset
+    from softcell.io.netcdf import open_inputs, read_failure, write_dataset
 
     options = dict(load_config(args.config).analysis) if args.config else {}
     options.update(
@@ -218,7 +220,10 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     )
     check_output(args.output, "analysis", inputs=args.inputs, overwrite=args.overwrite)
     ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
-    result = analyze(ds, options, progress=not args.quiet)
+    try:
+        result = analyze(ds, options, progress=not args.quiet)
+    except (OSError, RuntimeError) as exc:  # netCDF's "HDF error" names no file
+        raise read_failure(args.inputs, exc) from None
     path = write_dataset(result, args.output)
     print(f"analysis of {_describe(ds)} written to {path}")
     return 0
@@ -228,7 +233,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from softcell.core.limits import check_seed
     from softcell.core.schema import validate
     from softcell.io.files import check_output
-    from softcell.io.netcdf import open_inputs
+    from softcell.io.netcdf import open_inputs, read_failure
     from softcell.io.render import parse_point, parse_size, render
 
     check_seed(args.seed)  # before anything is read
@@ -240,23 +245,26 @@ def _cmd_render(args: argparse.Namespace) -> int:
         validate(ds)
     except SchemaError as exc:
         raise SoftcellError(f"{args.input} cannot be rendered: {exc}") from None
-    info = render(
-        ds,
-        args.output,
-        realization=args.realization,
-        point=point,
-        px_per_cm=args.px_per_cm,
-        fps=args.fps,
-        size=size,
-        start=args.start,
-        end=args.end,
-        noise=args.noise,
-        blur=args.blur,
-        illumination=args.illumination,
-        seed=args.seed,
-        head_mark=not args.no_head_mark,
-        progress=not args.quiet,
-    )
+    try:
+        info = render(
+            ds,
+            args.output,
+            realization=args.realization,
+            point=point,
+            px_per_cm=args.px_per_cm,
+            fps=args.fps,
+            size=size,
+            start=args.start,
+            end=args.end,
+            noise=args.noise,
+            blur=args.blur,
+            illumination=args.illumination,
+            seed=args.seed,
+            head_mark=not args.no_head_mark,
+            progress=not args.quiet,
+        )
+    except (OSError, RuntimeError) as exc:  # netCDF's "HDF error" names no file
+        raise read_failure([args.input], exc) from None
     for note in info.notes:
         print(f"note: {note}")
     print(
@@ -1032,17 +1040,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.simplefilter("once", CacheWarning)
         original, warnings.showwarning = warnings.showwarning, _plugin_warning(_show_warning)
         try:
-            args = parse_arguments(sys.argv[1:] if argv is None else list(argv))
-            return int(args.func(args))
+            with stop_signals():  # SIGTERM (batch schedulers) as Ctrl-C
+                try:
+                    args = parse_arguments(sys.argv[1:] if argv is None else list(argv))
+                    status = int(args.func(args))
+                    if received():  # swallowed on the way (Python only prints it in a finaliser)
+                        raise KeyboardInterrupt(
+                            "interrupted as the command ended; what it wrote is complete"
+                        )
+                    return status
+                except KeyboardInterrupt as exc:
+                    return _interrupted(exc)
         except SoftcellError as exc:
             print(f"softcell: error: {_one_line(exc)}", file=sys.stderr)
             return 2
-        except KeyboardInterrupt as exc:
-            text = str(exc) or "interrupted; rerun the same command to resume"
-            print(f"softcell: {_one_line(text)}", file=sys.stderr)
-            return 130
         finally:
             warnings.showwarning = original
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    """Say where a run stopped by Ctrl-C or SIGTERM stood; the exit status (130, 143)."""
+    text = str(exc) or "interrupted; rerun the same command to resume"
+    if received() == signal.SIGTERM:
+        text = f"{text} (SIGTERM)"
+    print(f"softcell: {_one_line(text)}", file=sys.stderr)
+    return exit_status()
 
 
 def entry() -> None:

@@ -10,6 +10,7 @@ import hashlib
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -382,6 +383,7 @@ def test_a_file_that_stored_every_installed_components_parameters_is_reused(swee
                 "softcell_parameters",
                 json.dumps({**values, "fake_level": 1.0, "atol": 1e-9}),
             )
+            nc.delncattr("softcell_sha256")  # 0.2.0 stored no checksum either
     before = tree_hash(sweep)
     assert _simulate(sweep) == 0
     assert tree_hash(sweep) == before
@@ -548,10 +550,11 @@ def test_a_full_disk_is_named_and_leaves_nothing(world, small_disk, capsys, monk
 # -- interruption -----------------------------------------------------------------------------
 
 
-def _interrupt(command: list[str], out: Path, wait_for: str) -> subprocess.CompletedProcess:
-    """Run ``command``, send SIGINT (as Ctrl-C does, to the process group) once ``wait_for``
-    files exist in ``out``, and return the finished process."""
-    import signal
+def _interrupt(
+    command: list[str], out: Path, wait_for: str, signum: int = signal.SIGINT
+) -> subprocess.CompletedProcess:
+    """Run ``command``, send ``signum`` (SIGINT: as Ctrl-C does) to its process group once
+    ``wait_for`` files exist in ``out``, and return the finished process."""
     import time
 
     process = subprocess.Popen(
@@ -563,7 +566,7 @@ def _interrupt(command: list[str], out: Path, wait_for: str) -> subprocess.Compl
         time.sleep(0.05)
     time.sleep(0.3)
     assert process.poll() is None, "the run ended before it could be interrupted"
-    os.killpg(process.pid, signal.SIGINT)
+    os.killpg(process.pid, signum)
     stdout, stderr = process.communicate(timeout=120)
     return subprocess.CompletedProcess(command, process.returncode, stdout, stderr)
 
@@ -587,15 +590,27 @@ LONG = [
 ]
 
 
-def test_ctrl_c_says_where_it_stopped_and_the_rerun_resumes_to_the_same_bytes(tmp_path):
+@pytest.mark.parametrize(
+    ("signum", "status", "tail"),
+    [
+        (signal.SIGINT, 130, ""),
+        # what batch schedulers send: handled as Ctrl-C, said, 128 + 15
+        pytest.param(signal.SIGTERM, 143, " (SIGTERM)", marks=pytest.mark.slow),
+    ],
+)
+def test_ctrl_c_says_where_it_stopped_and_the_rerun_resumes_to_the_same_bytes(
+    tmp_path, signum, status, tail
+):
     out = tmp_path / "run"
     command = [*PY, "simulate", *LONG, "--checkpoint-every", "0.2", "-o", str(out)]
-    run = _interrupt(command, out, ".*.ckpt.npz")
-    assert run.returncode == 130, run.stderr
+    run = _interrupt(command, out, ".*.ckpt.npz", signum)
+    assert run.returncode == status, run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in run.stderr, run.stderr
     assert lines[0].startswith("softcell: interrupted at t = ")
-    assert "s of point 0 realization 0; rerun the same command to resume" in lines[0]
+    assert lines[0].endswith(
+        f"s of point 0 realization 0; rerun the same command to resume{tail}"
+    ), lines[0]
     assert not list(out.glob("*.nc"))
     subprocess.run(command, check=True)
     subprocess.run([*PY, "simulate", *LONG, "-o", str(tmp_path / "whole")], check=True)
@@ -623,6 +638,8 @@ def test_ctrl_c_on_two_workers_is_one_line_and_resumes(tmp_path):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in run.stderr, run.stderr
     assert "interrupted at t = " in lines[0] and "rerun the same command" in lines[0]
+    finished = len(list(out.glob("*.nc")))  # counted from what is on disk
+    assert f"({finished} of 2 realizations finished)" in lines[0], lines[0]
     # The rerun, with a plugin warning: printed once by the command, not once per worker.
     env = {**os.environ, "SOFTCELL_DISABLE_PLUGINS": "nosuch"}
     rerun = subprocess.run(command, check=True, capture_output=True, text=True, env=env)

@@ -3,6 +3,10 @@ from the command line, the package's own error naming the argument from the libr
 nothing touched that softcell did not make."""
 
 import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -191,3 +195,202 @@ def test_an_ensemble_that_cannot_fit_on_the_disk_is_refused_before_planning(tmp_
     )
     assert "no space left on device (the run needs about" in line and " PiB, " in line
     assert not (tmp_path / "big").exists()
+
+
+# -- a file damaged on disk is named and recomputed, never trusted --------------------------
+
+
+@pytest.fixture()
+def one_run(tmp_path):
+    out = tmp_path / "run"
+    assert main(["simulate", "--radius", "4", "--duration", "0.2", *COARSE, "-o", str(out)]) == 0
+    path = out / "point000_realization0000.nc"
+    return out, path, path.read_bytes()
+
+
+def damage_data(path: Path) -> None:
+    """Flip 400 bytes of ``path`` past its header, where the file still opens and its request
+    still reads: the damage a rerun used to trust."""
+    from softcell.workflows.resume import stored_request
+
+    clean = path.read_bytes()
+    for start in range(len(clean) // 2, len(clean) - 400, 97):
+        bad = bytearray(clean)
+        bad[start : start + 400] = bytes(b ^ 0xFF for b in bad[start : start + 400])
+        path.write_bytes(bytes(bad))
+        try:
+            stored_request(path)
+        except SoftcellError:
+            continue
+        return
+    pytest.fail(f"no 400 bytes of {path} could be flipped with its header intact")
+
+
+def change_one_value(path: Path) -> None:
+    """Rewrite one stored number in place (a silent change no decompression notices)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "r+") as nc:
+        nc["bot_x"][0, 1] = nc["bot_x"][0, 1] + 1.0
+
+
+@pytest.mark.parametrize("harm", [damage_data, change_one_value])
+@pytest.mark.parametrize("flags", [[], ["--overwrite"]])
+def test_a_damaged_file_is_named_and_recomputed_by_a_rerun(one_run, capsys, harm, flags):
+    from softcell.io.netcdf import data_problem
+
+    out, path, clean = one_run
+    assert data_problem(path) is None
+    harm(path)
+    assert data_problem(path) is not None
+    argv = ["simulate", "--radius", "4", "--duration", "0.2", *COARSE, "-o", str(out), *flags]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert f"{path} was made for this request but it" in err and "recomputing it" in err, err
+    assert path.read_bytes() == clean
+
+
+def test_analyze_names_the_damaged_file(one_run, tmp_path, capsys):
+    out, path, _ = one_run
+    damage_data(path)
+    argv = ["analyze", str(out), "--discard", "0.05", "--quiet", "-o", str(tmp_path / "an.nc")]
+    line = one_line_exit_2(argv, capsys)
+    assert line.startswith(f"softcell: error: {path}: it cannot be read in full"), line
+    assert not (tmp_path / "an.nc").exists()
+
+
+def test_a_file_without_a_checksum_is_still_read_in_full(one_run, tmp_path):
+    import netCDF4
+
+    from softcell.io.netcdf import CHECKSUM, data_problem
+
+    _, path, _ = one_run
+    with netCDF4.Dataset(path, "r+") as nc:  # as softcell 0.2.0 wrote it
+        nc.delncattr(CHECKSUM)
+    assert data_problem(path) is None
+    damage_data(path)
+    assert "cannot be read in full" in data_problem(path)
+
+
+def test_the_checksum_is_no_attribute_of_the_data(one_run, tmp_path):
+    from softcell.io.netcdf import CHECKSUM, read_dataset, write_dataset
+
+    _, path, clean = one_run
+    ds = read_dataset(path)
+    assert CHECKSUM not in ds.attrs
+    write_dataset(ds, tmp_path / "again.nc")
+    assert (tmp_path / "again.nc").read_bytes() == clean
+
+
+# -- one writer per output folder; signals; renders that cannot end ------------------------
+
+
+PY = [sys.executable, "-m", "softcell"]
+
+
+def _start(argv: list[str]) -> subprocess.Popen:
+    return subprocess.Popen(
+        [*PY, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True,
+    )  # fmt: skip
+
+
+def _wait_for(path: Path, process: subprocess.Popen) -> None:
+    deadline = time.monotonic() + 300
+    while not path.exists():
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, f"{path} never appeared"
+        time.sleep(0.05)
+
+
+def test_a_second_writer_of_one_folder_is_refused_while_the_first_runs(tmp_path):
+    from softcell.io.files import LOCK_FILE
+
+    out = tmp_path / "run"
+    first = _start(["simulate", "--radius", "4", "--duration", "30", *COARSE, "-o", str(out)])
+    try:
+        _wait_for(out / LOCK_FILE, first)
+        second = subprocess.run(
+            [*PY, "simulate", "--radius", "5", "--duration", "0.2", *COARSE, "-o", str(out)],
+            capture_output=True,
+            text=True,
+        )
+        assert first.poll() is None, "the first run ended before the second was tried"
+    finally:
+        os.killpg(first.pid, signal.SIGINT)
+        first.communicate(timeout=120)
+    lines = second.stderr.strip().splitlines()
+    assert second.returncode == 2 and len(lines) == 1, second.stderr
+    assert lines[0].startswith(
+        f"softcell: error: {out} is being written by softcell simulate (pid {first.pid} on "
+    ), lines[0]
+    assert first.returncode == 130
+    assert not list(out.glob("*.nc")) and not (out / LOCK_FILE).exists()
+
+
+def test_a_lock_is_never_stale(tmp_path):
+    from softcell.io.files import LOCK_FILE
+
+    out = tmp_path / "run"
+    first = _start(["simulate", "--radius", "4", "--duration", "30", *COARSE, "-o", str(out)])
+    _wait_for(out / LOCK_FILE, first)
+    os.killpg(first.pid, signal.SIGKILL)  # no cleanup at all: the file stays, the lock not
+    first.communicate(timeout=60)
+    assert (out / LOCK_FILE).exists()
+    argv = ["simulate", "--radius", "4", "--duration", "0.2", *COARSE, "-o", str(out)]
+    assert main([*argv, "--overwrite"]) == 0
+    assert not (out / LOCK_FILE).exists()
+
+
+def test_one_process_holds_a_folder_once(tmp_path):
+    from softcell.io.files import folder_lock
+
+    with folder_lock(tmp_path, "softcell simulate"):
+        with pytest.raises(
+            SoftcellError, match=f"is being written by softcell simulate \\(pid {os.getpid()}"
+        ):
+            with folder_lock(tmp_path, "softcell simulate"):
+                pass
+    with folder_lock(tmp_path, "softcell simulate"):  # released
+        pass
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_refused_simulation_leaves_no_folder(tmp_path, capsys):
+    out = tmp_path / "a" / "b" / "run"
+    line = one_line_exit_2(
+        ["simulate", "--radius", "4", *COARSE, "--scheduler", "tcp://127.0.0.1:9", "-o", str(out)],
+        capsys,
+    )
+    assert "cannot reach the dask scheduler" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_stops_a_render_without_leaving_its_temporary_file(one_run, tmp_path):
+    out, _, _ = one_run
+    video = tmp_path / "v.mkv"
+    render = _start(
+        ["render", str(out), "--fps", "20000", "--px-per-cm", "40", "--quiet", "-o", str(video)]
+    )
+    deadline = time.monotonic() + 300
+    while not list(tmp_path.glob(".v.*.tmp.mkv")):
+        assert render.poll() is None, render.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    time.sleep(0.3)
+    assert render.poll() is None, "the render ended before it could be stopped"
+    os.killpg(render.pid, signal.SIGTERM)
+    _, err = render.communicate(timeout=120)
+    lines = err.strip().splitlines()
+    assert render.returncode == 143 and len(lines) == 1, err
+    assert lines[0].startswith("softcell: interrupted") and lines[0].endswith("(SIGTERM)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+def test_a_render_of_a_million_frames_is_refused_before_drawing(one_run, tmp_path, capsys):
+    out, _, _ = one_run
+    line = one_line_exit_2(
+        ["render", str(out), "--fps", "1e9", "-o", str(tmp_path / "v.mkv")], capsys
+    )
+    assert "fps = 1e+09 1/s over [0, 0.2] s makes 2e+08 frames, more than 1,000,000" in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

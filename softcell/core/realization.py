@@ -19,6 +19,7 @@ from softcell.core.components.contracts import Schedule, Stepper
 from softcell.core.engine.model import Model
 from softcell.core.engine.probe import diagnose
 from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
+from softcell.core.interrupt import received
 from softcell.errors import Interrupted, SimulationError
 
 #: Samples handed to the stepper per call (progress, checks and checkpoints happen between
@@ -118,7 +119,7 @@ def run_realization(
             if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
                 keep(j, state)
                 last_save = time.monotonic()
-            if stop is not None and stop():
+            if received() or (stop is not None and stop()):  # a swallowed Ctrl-C too
                 raise KeyboardInterrupt
     except KeyboardInterrupt:
         # The stepper may have been stopped half way through a chunk: save what is whole.

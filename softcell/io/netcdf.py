@@ -6,10 +6,15 @@ name. Reading never decodes ``time`` into dates or timedeltas: simulated time st
 in seconds.
 :func:`open_dataset` opens one file, or a directory holding the files of one sweep (one file
 per parameter point and realization) as one Dataset with one dimension per swept parameter.
+
+Every file carries the SHA-256 of what it stores (:data:`CHECKSUM`); :func:`data_problem`
+recomputes it, so that a file damaged on disk is named and never trusted (a rerun recomputes
+it, an analysis stops naming it).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from collections.abc import Mapping
@@ -45,6 +50,97 @@ def _encoding(ds: xr.Dataset, complevel: int) -> dict[str, dict[str, Any]]:
 TEXT_ENCODING = "S1"
 
 
+#: Global attribute holding the SHA-256 (hex) of a file's contents: every variable's name,
+#: type, shape, attributes and stored bytes, and every other global attribute.
+CHECKSUM = "softcell_sha256"
+
+
+def _value_bytes(value: Any) -> bytes:
+    if isinstance(value, str):
+        return b"s" + value.encode("utf-8")
+    array = np.asarray(value)
+    return array.dtype.str.encode() + np.ascontiguousarray(array).tobytes()
+
+
+def _digest(nc: Any) -> str:
+    """The SHA-256 of an open ``netCDF4.Dataset``'s contents as stored (no masking, scaling
+    or text decoding), :data:`CHECKSUM` itself left out."""
+    digest = hashlib.sha256()
+    for name in sorted(nc.variables):
+        var = nc.variables[name]
+        var.set_auto_maskandscale(False)
+        var.set_auto_chartostring(False)
+        digest.update(f"{name}|{var.dtype}|{var.shape}".encode())
+        for key in sorted(var.ncattrs()):
+            digest.update(key.encode() + _value_bytes(var.getncattr(key)))
+        digest.update(np.ascontiguousarray(var[...]).tobytes())
+    for key in sorted(k for k in nc.ncattrs() if k != CHECKSUM):
+        digest.update(key.encode() + _value_bytes(nc.getncattr(key)))
+    return digest.hexdigest()
+
+
+def data_problem(path: str | os.PathLike[str]) -> str | None:
+    """Why the NetCDF file ``path`` cannot be trusted, or None when its contents match the
+    checksum it was written with.
+
+    A file written before checksums existed (softcell 0.2.0) is read in full instead: a
+    compressed chunk that no longer decompresses is found, a silent change is not.
+
+    Returns
+    -------
+    str or None
+        e.g. ``"its contents do not match their checksum (damaged on disk)"``.
+    """
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path) as nc:
+            stored = nc.getncattr(CHECKSUM) if CHECKSUM in nc.ncattrs() else None
+            found = _digest(nc)
+    # netCDF4 reports damaged metadata as any of these (e.g. AttributeError: "Can't open
+    # HDF5 attribute"); whichever it is, the file cannot be trusted.
+    except (
+        OSError,
+        RuntimeError,
+        ValueError,
+        KeyError,
+        AttributeError,
+        IndexError,
+        TypeError,
+        MemoryError,
+    ) as exc:
+        return f"it cannot be read in full ({type(exc).__name__}: {exc}; damaged on disk)"
+    if stored is not None and stored != found:
+        return "its contents do not match their checksum (damaged on disk)"
+    return None
+
+
+def input_files(paths: list[str | os.PathLike[str]]) -> list[Path]:
+    """The files that ``paths`` (files, and sweep directories) stand for."""
+    files: list[Path] = []
+    for path in map(Path, paths):
+        if path.is_dir():
+            files.extend(_sweep_files(path))
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise SoftcellError(f"no such file or directory: {path}")
+    return files
+
+
+def read_failure(paths: list[str | os.PathLike[str]], exc: BaseException) -> BaseException:
+    """The error to raise when reading the inputs ``paths`` failed with ``exc`` (netCDF's
+    "HDF error" names no file): a one-line :class:`SoftcellError` naming the first damaged
+    file, or ``exc`` itself when every file reads in full and matches its checksum."""
+    for path in input_files(paths):
+        why = data_problem(path)
+        if why:
+            return SoftcellError(
+                f"{path}: {why}; recompute it (rerun the command that made it), or leave it out"
+            )
+    return exc
+
+
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: int = 4) -> Path:
     """Write ``ds`` to ``path`` as compressed NetCDF-4, atomically; each variable's CF
     ``units`` attribute is written as it is.
@@ -72,9 +168,14 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     if not isinstance(ds, xr.Dataset):
         raise ConfigError(f"write_dataset: ds is a {type(ds).__name__}, not an xarray.Dataset")
     path = Path(path)
-    ds = _to_cf(ds)
+    ds = _to_cf(ds).copy()
+    ds.attrs = {k: v for k, v in ds.attrs.items() if k != CHECKSUM}
     with atomic_write(path) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=_encoding(ds, complevel))
+        import netCDF4
+
+        with netCDF4.Dataset(tmp, "r+") as nc:  # the checksum of what was stored
+            nc.setncattr(CHECKSUM, _digest(nc))
     return path
 
 
@@ -83,7 +184,9 @@ def _open(path: Path, chunks: Mapping[str, int] | None = None) -> xr.Dataset:
     if path.stat().st_size == 0:
         raise SoftcellError(f"{path} is empty (0 bytes): not a NetCDF file")
     try:
-        return xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
+        ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
+        ds.attrs.pop(CHECKSUM, None)  # a storage detail, not part of the data
+        return ds
     except (OSError, RuntimeError, ValueError, KeyError) as exc:
         raise SoftcellError(
             f"cannot read {path}: not a NetCDF file, or truncated or corrupt "
@@ -198,15 +301,7 @@ def open_inputs(
     single file as is, several files combined along their swept parameters. ``chunks`` as
     for :func:`open_dataset` (``{}``: one dask chunk per file, so that an analysis holds one
     parameter point in memory at a time)."""
-    files: list[Path] = []
-    for path in map(Path, paths):
-        if path.is_dir():
-            files.extend(_sweep_files(path))
-        elif path.is_file():
-            files.append(path)
-        else:
-            raise SoftcellError(f"no such file or directory: {path}")
-    return _combine(files, chunks)
+    return _combine(input_files(paths), chunks)
 
 
 def _stored_parameters(parts: list[xr.Dataset], names: list[str]) -> list[dict[str, Any]]:

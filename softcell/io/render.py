@@ -41,6 +41,8 @@ DISK_CHECK_EVERY = 10
 MAX_FRAME_SIDE = 16384
 #: Smallest frame side (px): the codecs need a few macroblocks.
 MIN_FRAME_SIDE = 16
+#: Most frames one render writes: 9.3 h of video at 30 frames/s, days of drawing.
+MAX_FRAMES = 1_000_000
 
 
 def _fine_curve(mx: np.ndarray, my: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
@@ -260,7 +262,13 @@ def _frame_times(
             f"render span [{t0}, {t1}] s is not inside the record "
             f"[{time_valid[0]}, {time_valid[-1]}] s"
         )
-    times = t0 + np.arange(int(np.floor((t1 - t0) * fps + 1e-9)) + 1) / fps
+    count = np.floor((t1 - t0) * fps + 1e-9) + 1
+    if count > MAX_FRAMES:
+        raise SoftcellError(
+            f"fps = {fps:g} 1/s over [{t0:g}, {t1:g}] s makes {count:.3g} frames, more than "
+            f"{MAX_FRAMES:,}; lower --fps or shorten the span (--start, --end)"
+        )
+    times = t0 + np.arange(int(count)) / fps
     notes = []
     step = np.diff(time_valid[(time_valid >= t0) & (time_valid <= t1)])
     coarse = bool(step.size and step.max() > 1.0 / fps * (1 + 1e-9))

@@ -132,7 +132,8 @@ def _stop(client, futures: dict[Any, Task]) -> str:
         client.cancel(list(futures))
         for stop_file in stop_files:
             stop_file.unlink(missing_ok=True)
-    done = [t for f, t in futures.items() if f.status == "finished" and f.result() is not None]
+    # What is finished is what is on disk (a cancelled future no longer says it finished).
+    done = [t for t in futures.values() if Path(t.path).exists()]
     unfinished = [t for t in futures.values() if t not in done]
     return _where(unfinished, len(done), len(futures))
 

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Callable
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
@@ -130,6 +132,10 @@ def _check_execution(
         )
 
 
+def _warn(message: str) -> None:
+    warnings.warn(message, stacklevel=3)
+
+
 def _progress_bar(todo: list[Task], progress: bool):
     from softcell.config import progress_bar_class
 
@@ -184,7 +190,8 @@ def simulate(
         Recompute files and checkpoints in ``out`` that do not match the request, and remove
         simulation files that are no part of it (``log`` is told which).
     log : callable, optional
-        Receives one line naming what ``overwrite`` removes.
+        Receives one line naming what ``overwrite`` removes, and one per file made for this
+        request but damaged on disk (its checksum fails), which is recomputed.
     registry : Registry, optional
         Where the components are looked up; by default the built-ins and the installed
         plugins. Workers of a cluster always use their own installed plugins.
@@ -202,7 +209,7 @@ def simulate(
     softcell.errors.Interrupted
         On Ctrl-C, once the running realizations' checkpoints are saved.
     """
-    from softcell.io.files import check_output, check_writable, remove
+    from softcell.io.files import check_output, folder_lock
 
     registry = registry if registry is not None else default_registry()
     if not isinstance(config, RunConfig):
@@ -215,18 +222,49 @@ def simulate(
     tasks = plan(
         config, out, realizations=realizations, seed=seed, membrane=membrane, registry=registry
     )
-    resume = resume_plan(tasks, out, overwrite=overwrite)
-    check_writable(out, expected_bytes(resume.todo))
     if scheduler is not None:
         check_scheduler(scheduler)
-    if resume.remove and log:
-        names = [p.name for p in resume.remove]
+    made = [p for p in (out, *out.parents) if not p.exists()]  # removed again if refused
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        with folder_lock(out, "softcell simulate"):  # one writer at a time
+            _run(tasks, out, overwrite, log, workers, scheduler, client, progress,
+                 checkpoint_every, registry)  # fmt: skip
+    except BaseException:
+        with suppress(OSError):  # only while empty: a run refused or failed at once leaves
+            for folder in made:  # no folder behind, an interrupted one its checkpoints
+                folder.rmdir()
+        raise
+    return [Path(t.path) for t in tasks]
+
+
+def _run(
+    tasks: list[Task],
+    out: Path,
+    overwrite: bool,
+    log: Callable[[str], None] | None,
+    workers: int,
+    scheduler: str | None,
+    client: Any,
+    progress: bool,
+    checkpoint_every: float,
+    registry: Registry,
+) -> None:
+    """Compare ``out`` with the request and run what is missing (``out`` is locked)."""
+    from softcell.io.files import check_writable, remove
+
+    resume = resume_plan(tasks, out, overwrite=overwrite)
+    check_writable(out, expected_bytes(resume.todo))
+    for path, why in resume.damaged:  # never silently, even without a log
+        (log or _warn)(f"{path} was made for this request but {why}: recomputing it")
+    overwritten = [p for p in resume.remove if p not in {d for d, _ in resume.damaged}]
+    if overwritten and log:
+        names = [p.name for p in overwritten]
         log(
             f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
             f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})"
         )
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
-    out.mkdir(parents=True, exist_ok=True)
     todo = resume.todo
     with _progress_bar(todo, progress) as bar:
         if client is not None:

@@ -10,7 +10,7 @@ the first setting that differs and both values, unless the user asks to overwrit
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -86,6 +86,14 @@ def _reuse_problem(path: Path, wanted: dict[str, Any], times: np.ndarray) -> str
     return None
 
 
+def _damage(path: Path) -> str | None:
+    """Why a file made for this very request cannot be trusted (see
+    :func:`softcell.io.netcdf.data_problem`), or None."""
+    from softcell.io.netcdf import data_problem
+
+    return data_problem(path)
+
+
 def _checkpoint_problem(checkpoint: Path, wanted: dict[str, Any]) -> str | None:
     """Why the checkpoint cannot resume the request ``wanted``, or None."""
     try:
@@ -99,11 +107,13 @@ def _checkpoint_problem(checkpoint: Path, wanted: dict[str, Any]) -> str | None:
 @dataclass
 class Resume:
     """What an existing output directory holds for a request: tasks still to run, files to
-    remove first (``overwrite``), and how many finished files are reused."""
+    remove first (``overwrite``), how many finished files are reused, and the files made for
+    this request but damaged on disk, with why (removed and recomputed, overwrite or not)."""
 
     todo: list[Task]
     remove: list[Path]
     reused: int
+    damaged: list[tuple[Path, str]] = field(default_factory=list)
 
 
 def _overwrite_hint(path: Path, why: str) -> SoftcellError:
@@ -140,7 +150,9 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
     Returns
     -------
     Resume
-        The tasks still to run, the files to remove first, the number of files reused.
+        The tasks still to run, the files to remove first, the number of files reused. A
+        file made for this very request whose contents fail their checksum is never reused:
+        it is listed in ``damaged`` and recomputed.
 
     Raises
     ------
@@ -157,10 +169,13 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
         wanted = task.request()
         if path.exists():
             why = _reuse_problem(path, wanted, sample_times(task.params))
-            if why is None:
+            damage = _damage(path) if why is None else None
+            if why is None and damage is None:
                 resume.reused += 1
                 continue
-            if not overwrite:
+            if damage is not None:  # softcell made it for this request: redo it, say so
+                resume.damaged.append((path, damage))
+            elif not overwrite:
                 raise _overwrite_hint(path, why)
             resume.remove.append(path)
         if checkpoint.exists():
