@@ -2,6 +2,7 @@
 from the command line, the package's own error naming the argument from the library, and
 nothing touched that softcell did not make."""
 
+import json
 import os
 import signal
 import subprocess
@@ -394,3 +395,145 @@ def test_a_render_of_a_million_frames_is_refused_before_drawing(one_run, tmp_pat
     )
     assert "fps = 1e+09 1/s over [0, 0.2] s makes 2e+08 frames, more than 1,000,000" in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+# -- studies write only into folders they made ------------------------------------------------
+
+
+@pytest.mark.parametrize("command", [["beyond"], ["study", "sensitivity", "--only", "pivot"]])
+def test_a_study_refuses_a_folder_it_did_not_make(tmp_path, capsys, command):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "sensitivity.json").write_text('{"mine": 1}')
+    assert main([*command, "-o", str(mine)]) == 2
+    err = capsys.readouterr().err
+    assert "is not empty and was not made by `softcell " in err and "study.json" in err
+    assert (mine / "sensitivity.json").read_text() == '{"mine": 1}'
+    assert sorted(p.name for p in mine.iterdir()) == ["sensitivity.json"]
+
+
+def test_a_study_folder_is_kept_for_its_own_study_and_seed(tmp_path):
+    from softcell.workflows.reproduce import QUICK
+    from softcell.workflows.study import run_variants
+
+    def run(command, seed, overwrite=False):
+        run_variants(
+            tmp_path,
+            (),
+            QUICK,
+            command=command,
+            seed=seed,
+            workers=1,
+            overwrite=overwrite,
+            progress=False,
+            log=None,
+        )
+
+    run("beyond", 3)
+    run("beyond", 3)  # a rerun of the same study
+    with pytest.raises(SoftcellError, match="made with seed = 3, not 4; rerun with --overwrite"):
+        run("beyond", 4)
+    with pytest.raises(SoftcellError, match="holds the study `softcell beyond`, not"):
+        run("study sensitivity", 3)
+    run("beyond", 4, overwrite=True)
+    assert json.loads((tmp_path / "study.json").read_text()) == {"study": "beyond", "seed": 4}
+
+
+# -- track stops its reader on every error -----------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def plain_video(tmp_path_factory):
+    """200 frames of an empty grey floor: no plate, no ring, no bot."""
+    import cv2
+
+    path = tmp_path_factory.mktemp("video") / "floor.mkv"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), 25.0, (320, 240))
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        writer.write(rng.integers(100, 140, (240, 320, 3), dtype=np.uint8))
+    writer.release()
+    return path
+
+
+@pytest.mark.parametrize(
+    ("flags", "words"),
+    [
+        ([], "pass px_per_cm, arena_size (cm) to derive it, or plate_size"),
+        (["--plate-size", "30"], "plate"),
+    ],
+)
+def test_track_ends_with_one_line_on_an_error(plain_video, tmp_path, flags, words):
+    # Before: the main thread released the capture while the read-ahead thread still read
+    # from it, and both waited for ever.
+    run = subprocess.run(
+        [*PY, "track", str(plain_video), *flags, "-o", str(tmp_path / "t.nc")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], run.stderr
+    assert not (tmp_path / "t.nc").exists()
+
+
+# -- a scheduler address that is not a dask scheduler -----------------------------------------
+
+
+@pytest.fixture
+def listener():
+    """A loopback listener that is no dask scheduler: it accepts, then says ``reply`` (or
+    nothing) and keeps the connection open."""
+    import socket
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    held = []
+
+    def serve(reply: bytes) -> None:
+        while True:
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            held.append(connection)
+            if reply:
+                connection.sendall(reply)
+
+    def start(reply: bytes) -> str:
+        threading.Thread(target=serve, args=(reply,), daemon=True).start()
+        return f"tcp://127.0.0.1:{server.getsockname()[1]}"
+
+    yield start
+    server.close()
+    for connection in held:
+        connection.close()
+
+
+@pytest.mark.parametrize(
+    ("reply", "words"),
+    [
+        (b"", "accepts connections but is not a dask scheduler (it said nothing in 5 s)"),
+        (b"\xff" * 64, "where a dask handshake has at most 65536"),  # garbage: 2**64 - 1
+        (b"HTTP/1.1 200 OK\r\n\r\n", "is not a dask scheduler (its first message claims"),
+    ],
+)
+def test_a_listener_that_is_no_scheduler_is_one_line(listener, tmp_path, capsys, reply, words):
+    address = listener(reply)
+    out = tmp_path / "out"
+    argv = ["simulate", "--radius", "8", "--duration", "1", "--scheduler", address]
+    assert main([*argv, "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
+
+
+def test_an_inproc_address_of_no_scheduler_is_one_line(tmp_path, capsys):
+    out = tmp_path / "out"
+    argv = ["simulate", "--radius", "8", "--duration", "1", "--scheduler", "inproc://nothing"]
+    assert main([*argv, "-o", str(out), "--quiet"]) == 2
+    assert "no dask scheduler listens at 'inproc://nothing' in this process" in (
+        capsys.readouterr().err
+    )
+    assert not out.exists()

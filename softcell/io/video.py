@@ -196,6 +196,7 @@ def track(
         )
     calibration = read_calibration(camera) if camera is not None else None
     capture = cv2.VideoCapture(str(video))
+    frames = None
     try:
         if not capture.isOpened():
             raise SoftcellError(f"cannot read video file {video} (corrupt or unknown format)")
@@ -237,6 +238,10 @@ def track(
                 itertools.chain([first], frames), tracker, rate, total, progress, on_frame, draw
             )
     finally:
+        # The read-ahead thread stops before the capture is released, whatever went wrong:
+        # releasing a capture another thread reads from deadlocks.
+        if frames is not None:
+            frames.close()
         capture.release()
     failures = _failures(result, video)
     return tracked_dataset(
@@ -281,12 +286,7 @@ def _geometry(
             "softcell_bot_height_cm": float(bot_height),
         }
     if px_per_cm is None:
-        if arena_size is None:
-            raise SoftcellError(
-                "pass px_per_cm, arena_size (cm) to derive it, or "
-                "plate_size (cm) to calibrate from the plate"
-            )
-        px_per_cm = width / arena_size
+        px_per_cm = width / arena_size  # one of them is given (_check_camera_arguments)
     geometry = Frame(float(px_per_cm), width, height, float(origin[0]), float(origin[1]))
     return geometry, {
         "softcell_px_per_cm": float(px_per_cm),
@@ -334,6 +334,11 @@ def _check_camera_arguments(
             "linear frame instead: give one of them"
         )
     if plate_size is None:
+        if px_per_cm is None and arena_size is None:
+            raise SoftcellError(
+                "pass px_per_cm, arena_size (cm) to derive it, or "
+                "plate_size (cm) to calibrate from the plate"
+            )
         _check_without_plate(camera, camera_height, ring_height, bot_height)
     _check_detection_arguments(ring_threshold, dark_fraction)
 

@@ -130,6 +130,7 @@ def beyond(
         out,
         variants,
         base,
+        command="beyond",
         seed=seed,
         workers=workers,
         overwrite=overwrite,

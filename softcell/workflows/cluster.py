@@ -34,7 +34,7 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
         check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="30s")
-        except OSError as exc:
+        except (OSError, ValueError) as exc:  # ValueError: an inproc address that is not
             raise SoftcellError(
                 f"cannot reach the dask scheduler at {scheduler!r}: {exc}"
             ) from None
@@ -184,10 +184,55 @@ def check_scheduler(address: str) -> None:
             f"{', '.join(SCHEDULER_SCHEMES)} (e.g. tcp://10.0.0.5:8786)"
         )
     if parts.scheme == "inproc":
+        from distributed.comm.inproc import global_manager
+
+        try:  # an address of another form (IP/PID/N) is no listener either
+            listener = global_manager.get_listener_for(address.removeprefix("inproc://"))
+        except ValueError:
+            listener = None
+        if listener is None:
+            raise SoftcellError(
+                f"no dask scheduler listens at {address!r} in this process (an inproc "
+                "address lives in the process that made it; from another one, give tcp://)"
+            )
         return
     try:
-        socket.create_connection((host, port), timeout=5).close()
+        with socket.create_connection((host, port), timeout=5) as connection:
+            if parts.scheme == "tcp":
+                _check_handshake(connection, address)
     except OSError as exc:
         raise SoftcellError(
             f"cannot reach the dask scheduler at {address!r}: {exc.strerror or exc}"
         ) from None
+
+
+#: The largest first message a dask scheduler is taken to send (its handshake: a few
+#: hundred bytes); anything longer is not a scheduler.
+HANDSHAKE_BYTES = 1 << 16
+
+
+def _check_handshake(connection, address: str) -> None:
+    """A dask scheduler speaks first: the byte count of its handshake (uint64, little
+    endian), then the handshake. Refuse a peer that is silent for 5 s, closes, or states a
+    size no handshake has, before dask reads (and allocates) what the peer claims."""
+
+    header = b""
+    try:
+        while len(header) < 8:
+            chunk = connection.recv(8 - len(header))
+            if not chunk:
+                break
+            header += chunk
+    except TimeoutError:
+        raise SoftcellError(
+            f"{address!r} accepts connections but is not a dask scheduler (it said nothing in 5 s)"
+        ) from None
+    size = int.from_bytes(header, "little") if len(header) == 8 else 0
+    if not 0 < size <= HANDSHAKE_BYTES:
+        said = (
+            f"it closed after {len(header)} bytes"
+            if len(header) < 8
+            else f"its first message claims {size} bytes, where a dask handshake has at most "
+            f"{HANDSHAKE_BYTES}"
+        )
+        raise SoftcellError(f"{address!r} is not a dask scheduler ({said})")

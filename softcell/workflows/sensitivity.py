@@ -143,6 +143,7 @@ def sensitivity(
         out,
         variants,
         base,
+        command="study sensitivity",
         seed=seed,
         workers=workers,
         overwrite=overwrite,

@@ -9,12 +9,14 @@ sensitivity`` are studies; this module holds what they share.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS
+from softcell.errors import SoftcellError
 from softcell.workflows.reproduce import QUICK, Design, reproduce
 
 
@@ -43,11 +45,48 @@ class Variant:
         )
 
 
+#: What a study's folder was made for: the study and its seed (checked on a rerun, as a
+#: reproduction's ``reproduce.json`` is; each variant's folder has its own).
+STUDY_MANIFEST = "study.json"
+
+
+def check_study_directory(out: Path, command: str, seed: int, overwrite: bool) -> None:
+    """Stop, in one line, unless ``out`` is new or empty, or holds the study ``command``
+    (e.g. ``"beyond"``) made from ``seed``: a study writes only into folders it made
+    (``overwrite`` lifts this, as it does for ``softcell reproduce``)."""
+    if overwrite or not out.is_dir() or not any(out.iterdir()):
+        return
+    manifest = out / STUDY_MANIFEST
+    if not manifest.is_file():
+        raise SoftcellError(
+            f"{out} is not empty and was not made by `softcell {command}` (no "
+            f"{STUDY_MANIFEST}); choose a new directory, or pass --overwrite to write into it"
+        )
+    try:
+        made = json.loads(manifest.read_text(encoding="utf-8"))
+        made_by, made_seed = made["study"], made["seed"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise SoftcellError(
+            f"{manifest} is unreadable ({exc}); pass --overwrite to write into {out}"
+        ) from None
+    if made_by != command:
+        raise SoftcellError(
+            f"{out} holds the study `softcell {made_by}`, not `softcell {command}`; "
+            "write to another directory"
+        )
+    if made_seed != seed:
+        raise SoftcellError(
+            f"{out} holds this study made with seed = {made_seed}, not {seed}; rerun with "
+            "--overwrite to recompute it, or write to another directory"
+        )
+
+
 def run_variants(
     out: Path,
     variants: tuple[Variant, ...],
     base: Design,
     *,
+    command: str,
     seed: int,
     workers: int | None,
     overwrite: bool,
@@ -55,9 +94,19 @@ def run_variants(
     log: Callable[[str], None] | None,
 ) -> None:
     """Reproduce each variant of ``base`` into ``out/<variant>`` from one root seed; a
-    variant that finished there (same design, seed and version) is kept as it is."""
+    variant that finished there (same design, seed and version) is kept as it is.
+
+    ``out`` must be new, empty or a folder the study ``command`` made from ``seed``
+    (:func:`check_study_directory`); it is marked as such before any variant runs.
+    """
+    from softcell.io.files import atomic_write, check_output
     from softcell.workflows.reproduce import finished
 
+    out = check_output(Path(out), "report", directory=True)
+    check_study_directory(out, command, seed, overwrite)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / STUDY_MANIFEST) as tmp:
+        tmp.write_text(json.dumps({"study": command, "seed": seed}) + "\n", encoding="utf-8")
     say = log or (lambda _: None)
     for i, variant in enumerate(variants):
         design, folder = variant.design(base), out / variant.name
