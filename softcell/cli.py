@@ -277,13 +277,13 @@ def _cmd_render(args: argparse.Namespace) -> int:
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
-    from softcell.io.files import check_output
+    from softcell.io.files import check_output, no_input
     from softcell.io.netcdf import write_dataset
     from softcell.io.video import codec, parse_origin, track
 
     origin = parse_origin(args.origin, "--origin") if args.origin else (0.0, 0.0)
     if not args.video.is_file():
-        raise SoftcellError(f"no such video file: {args.video}")
+        raise no_input(args.video, "video file")
     check_output(args.output, "tracking", inputs=[args.video], overwrite=args.overwrite)
     if args.overlay is not None:
         if os.path.abspath(args.overlay) == os.path.abspath(args.output):

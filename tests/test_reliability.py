@@ -537,3 +537,46 @@ def test_an_inproc_address_of_no_scheduler_is_one_line(tmp_path, capsys):
         capsys.readouterr().err
     )
     assert not out.exists()
+
+
+# -- inputs that are not what they should be ---------------------------------------------------
+
+
+def test_an_unreadable_input_folder_is_not_called_empty(tmp_path, capsys, monkeypatch):
+    import softcell.io.netcdf
+
+    folder = tmp_path / "sweep"
+    folder.mkdir()
+
+    def denied(path):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    # chmod 000 would not stop root (CI runs as root): refuse the listing itself
+    monkeypatch.setattr(softcell.io.netcdf.os, "scandir", denied)
+    assert main(["analyze", str(folder), "-o", str(tmp_path / "a.nc")]) == 2
+    assert f"cannot read directory {folder} (Permission denied)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (
+            ["track", "D/v.mkv", "--px-per-cm", "10", "-o", "W/t.nc"],
+            "v.mkv is a directory, not a video file",
+        ),
+        (["render", "D/v.mkv", "-o", "W/out.mkv"], "no .nc files in directory"),
+    ],
+)
+def test_a_directory_where_a_file_is_expected_is_named_so(tmp_path, capsys, argv, words):
+    (tmp_path / "v.mkv").mkdir()
+    argv = [a.replace("D/", f"{tmp_path}/").replace("W/", f"{tmp_path}/") for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and "no such" not in err, err
+
+
+def test_read_dataset_of_a_directory_says_so(tmp_path):
+    from softcell.io.netcdf import read_dataset
+
+    with pytest.raises(SoftcellError, match="is a directory, not a NetCDF file"):
+        read_dataset(tmp_path)

@@ -41,6 +41,17 @@ class StorageError(SoftcellError):
     """A file could not be written: full disk, read-only file system, no permission."""
 
 
+def no_input(path: str | os.PathLike[str], what: str = "file") -> SoftcellError:
+    """The error for an input ``path`` that is no readable ``what`` (e.g. "video file"):
+    missing, a directory, or something else that is not a regular file."""
+    path = Path(path)
+    if path.is_dir():
+        return SoftcellError(f"{path} is a directory, not a {what}")
+    if path.exists():
+        return SoftcellError(f"{path} is not a regular file, so no {what}")
+    return SoftcellError(f"no such {what}: {path}")
+
+
 def temporary_path(path: str | os.PathLike[str]) -> Path:
     """A hidden name beside ``path``, unique to this process and call, keeping the suffix
     (``.name.<pid>-<token>.tmp.nc``): writers that infer the format from it still can, and

@@ -27,7 +27,7 @@ import xarray as xr
 import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
 from softcell.errors import ConfigError, SoftcellError
-from softcell.io.files import atomic_write
+from softcell.io.files import atomic_write, no_input
 
 #: Keyword arguments that keep simulated time as plain seconds.
 DECODE = {"decode_times": False, "decode_timedelta": False}
@@ -232,7 +232,7 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     ``units`` attribute it was written with."""
     path = Path(path)
     if not path.is_file():
-        raise SoftcellError(f"no such file: {path}")
+        raise no_input(path, "NetCDF file")
     with _open(path) as ds:
         try:
             return _from_cf(ds.load())
@@ -272,7 +272,12 @@ def open_dataset(
 
 
 def _sweep_files(directory: Path) -> list[Path]:
-    files = sorted(p for p in directory.glob("*.nc") if not p.name.startswith("."))
+    try:  # Path.glob says nothing of a directory it cannot read
+        with os.scandir(directory) as entries:
+            names = [e.name for e in entries]
+    except OSError as exc:
+        raise SoftcellError(f"cannot read directory {directory} ({exc.strerror or exc})") from None
+    files = sorted(directory / n for n in names if n.endswith(".nc") and not n.startswith("."))
     if not files:
         raise SoftcellError(f"no .nc files in directory {directory}")
     return files

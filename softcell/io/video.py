@@ -33,7 +33,7 @@ from softcell.core.tracking import (
     tracked_dataset,
 )
 from softcell.errors import SoftcellError
-from softcell.io.files import atomic_write
+from softcell.io.files import atomic_write, no_input
 
 
 def codec(path: Path) -> str:
@@ -393,7 +393,7 @@ def _check_track_arguments(
             f"origin = {tuple(origin)} is not allowed: must be two finite coordinates X,Y in cm"
         )
     if not video.is_file():
-        raise SoftcellError(f"no such video file: {video}")
+        raise no_input(video, "video file")
     if video.stat().st_size == 0:
         raise SoftcellError(f"video file {video} is empty")
 
