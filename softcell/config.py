@@ -8,12 +8,14 @@ from __future__ import annotations
 
 #: Options of every compiled kernel. ``fastmath`` stays off: the explicit reference must be
 #: reproducible to the last bit, and checkpoints must resume to the same bytes.
-JIT: dict[str, object] = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
+#: (Read as ``softcell.config.JIT``: taking it first has numba keep the cache files of
+#: softcell's own functions in the module store's cache, see :func:`use_module_store`.)
+_JIT: dict[str, object] = {"cache": True, "fastmath": False, "error_model": "numpy", "nogil": True}
 
 #: Options of the kernels that take a compiled function as an argument (the generic Rosenbrock
 #: stage, :mod:`softcell.kernels.rosenbrock`): those of the kernels, but not cached on their
 #: own; they are compiled into the generated modules that call them, which are.
-JIT_COMPOSED: dict[str, object] = {**JIT, "cache": False}
+JIT_COMPOSED: dict[str, object] = {**_JIT, "cache": False}
 
 #: Membrane points farther than this many contact lengths lambda from the bot feel no contact
 #: force (exp(-25) ~ 1.4e-11 of the force at contact).
@@ -53,9 +55,22 @@ _module_stores: list[object] = []
 def use_module_store(store: object) -> None:
     """Keep the composed models in ``store`` from now on: an object with
     ``place(label, key, source, description) -> str`` that stores a generated module's source
-    and returns its path (see :class:`softcell.core.engine.compiled.ModuleStore`). Importing
-    softcell sets the disk cache of :mod:`softcell.io.model_cache`."""
+    and returns its path (see :class:`softcell.core.engine.compiled.ModuleStore`), and
+    optionally ``cache_kernels()``, called once before the first kernel is compiled, to keep
+    numba's cache files of softcell's own functions too. Importing softcell sets the disk
+    cache of :mod:`softcell.io.model_cache`."""
     _module_stores[:] = [store]
+
+
+def __getattr__(name: str) -> object:
+    # ``JIT`` is handed out here so that the store may place numba's cache files of the
+    # kernels before the first ``@njit(**JIT)`` picks where they go.
+    if name == "JIT":
+        store = module_store()
+        if store is not None and hasattr(store, "cache_kernels"):
+            store.cache_kernels()
+        return _JIT
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def module_store() -> object | None:

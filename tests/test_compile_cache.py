@@ -66,6 +66,12 @@ def cache(tmp_path, monkeypatch):
     return root
 
 
+def composed(cache: Path) -> list[model_cache.Entry]:
+    """The cache's entries of composed models (not the one of softcell's own kernels, made
+    when a process first imports them with ``cache`` as its cache)."""
+    return [e for e in model_cache.entries(cache) if e.label != model_cache.KERNELS]
+
+
 def _plugin(folder: Path, factor: float) -> Path:
     package = folder / "cachedplugin"
     package.mkdir(parents=True, exist_ok=True)
@@ -104,7 +110,7 @@ def test_a_second_process_reads_the_compiled_function_and_a_changed_plugin_recom
     _plugin(tmp_path / "site", 3.0)  # the plugin's code changes: never its old entry
     third = _result(_child(cache, plugin, source))
     assert third == {"value": 3.0 * 6 + 4, "hits": 0, "misses": 1}
-    assert len(model_cache.entries(cache)) == 2
+    assert len(composed(cache)) == 2
 
 
 def test_processes_starting_at_once_share_one_entry(cache, tmp_path):
@@ -114,7 +120,7 @@ def test_processes_starting_at_once_share_one_entry(cache, tmp_path):
     children = [_child(cache, plugin, source) for _ in range(6)]
     results = [_result(c) for c in children]
     assert {r["value"] for r in results} == {16.0}
-    assert len(model_cache.entries(cache)) == 1
+    assert len(composed(cache)) == 1
     assert _result(_child(cache, plugin, source))["hits"] == 1
 
 
@@ -135,7 +141,7 @@ def _forget():
 def test_a_corrupt_entry_is_rebuilt_with_a_warning(cache, damage):
     module = _compile()
     assert module.total(np.arange(4.0)) == 16.0
-    (folder,) = [e.path for e in model_cache.entries(cache)]
+    (folder,) = [e.path for e in composed(cache)]
     if damage == "source":
         path = folder / model_cache.SOURCE
     else:
@@ -161,7 +167,7 @@ def test_a_closure_is_compiled_in_memory_with_a_warning(cache):
     with pytest.warns(CacheWarning, match="closure"):
         module = compiled.compile_module("test", SOURCE, {"kernel": closure, "OFFSET": 0.0})
     assert module.total(np.arange(4.0)) == 30.0
-    assert model_cache.entries(cache) == []
+    assert composed(cache) == []
 
 
 def test_bindings_other_than_compiled_functions_and_scalars_are_refused(cache):
@@ -195,7 +201,7 @@ def test_the_cache_command_shows_and_clears(cache, capsys):
     assert "removed 0 stale entries" in capsys.readouterr().out
     assert main(["cache", "clear"]) == 0
     assert "removed 1 entries" in capsys.readouterr().out
-    assert model_cache.entries(cache) == []
+    assert composed(cache) == []
 
 
 def test_the_plugin_guide_example_composes_and_runs(cache):
@@ -216,7 +222,7 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
     loop(*args, out)
     run_and_tumble_drive(*args, expected)
     assert np.array_equal(out, expected) and np.any(out != 0.0)
-    assert [e.label for e in model_cache.entries(cache)] == ["my-loop"]
+    assert [e.label for e in composed(cache)] == ["my-loop"]
 
 
 MODEL_CHILD = textwrap.dedent("""
@@ -260,7 +266,7 @@ def test_the_built_in_model_is_compiled_once_per_machine(cache):
     assert (runs[0]["hits"], runs[0]["misses"]) == (0, 1)
     assert (runs[1]["hits"], runs[1]["misses"]) == (1, 0)
     assert runs[0]["pose"] == runs[1]["pose"]
-    labels = {e.label for e in model_cache.entries(cache)}
+    labels = {e.label for e in composed(cache)}
     assert {"rodas4-loop", "rodas4-grid", "partials", "hessians", "fd-drive"} <= labels
 
 
@@ -299,7 +305,7 @@ def test_cache_clear_says_what_it_could_not_remove(cache, capsys, monkeypatch):
     from softcell.cli import main
 
     _compile()
-    (entry,) = model_cache.entries(cache)
+    (entry,) = composed(cache)
     real = model_cache.shutil.rmtree
 
     def refuse(path, *args, **kwargs):
@@ -311,7 +317,7 @@ def test_cache_clear_says_what_it_could_not_remove(cache, capsys, monkeypatch):
     assert f"could not remove 1 of 1 entries from {cache}" in err
     assert "PermissionError: Permission denied" in err and "0 removed" in err
     monkeypatch.setattr(model_cache.shutil, "rmtree", real)
-    assert model_cache.entries(cache) == [entry]
+    assert composed(cache) == [entry]
 
 
 def test_stale_without_clear_is_refused(cache, capsys):
@@ -319,3 +325,24 @@ def test_stale_without_clear_is_refused(cache, capsys):
 
     assert main(["cache", "--stale"]) == 2
     assert "--stale goes with 'clear'" in capsys.readouterr().err
+
+
+def test_the_kernels_cache_files_live_in_the_cache_and_are_cleared(tmp_path):
+    # Before: numba wrote them beside the sources (site-packages/softcell/**/__pycache__),
+    # where `softcell cache clear` never looked.
+    cache = tmp_path / "cache"
+    code = (
+        "import numpy as np\n"
+        "from softcell.kernels.runs import run_lengths\n"
+        "run_lengths(np.array([1, 1, 0, 1], dtype=np.int8), np.zeros(4, dtype=np.int64))\n"
+        "print(run_lengths._cache._cache_path)\n"
+    )
+    env = {**os.environ, "SOFTCELL_CACHE_DIR": str(cache)}
+    run = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert Path(run.stdout.strip()) == cache / "kernels" / "kernels"
+    assert list((cache / "kernels" / "kernels").glob("runs.run_lengths-*.nbi"))
+    (entry,) = model_cache.entries(cache)
+    assert entry.label == model_cache.KERNELS and not entry.stale
+    assert model_cache.clear(cache) == 1 and not (cache / "kernels").exists()

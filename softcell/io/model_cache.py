@@ -19,6 +19,7 @@ Location: ``$SOFTCELL_CACHE_DIR``, else the user cache directory (``platformdirs
 from __future__ import annotations
 
 import datetime
+import functools
 import hashlib
 import io
 import json
@@ -183,6 +184,67 @@ class DiskStore:
         return str(path)
 
 
+    def cache_kernels(self) -> None:
+        """Have numba keep the cache files of softcell's own compiled functions (kernels,
+        built-in components) in the entry :data:`KERNELS` of this cache, not beside their
+        sources in site-packages, so that ``softcell cache clear`` removes them too."""
+        _use_kernel_locator()
+
+
+#: The entry holding numba's cache files of softcell's own compiled functions, in folders
+#: named as the package's (``kernels/kernels``, ``kernels/plugins``, ...). numba checks each
+#: file against its function's source and its own version; the entry is stale when made by
+#: another softcell or numba.
+KERNELS = "kernels"
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def _kernel_meta() -> dict[str, str]:
+    import numba
+
+    return {
+        "label": KERNELS,
+        "description": "softcell's own compiled functions (numba's cache files)",
+        "softcell": __version__,
+        "numba": numba.__version__,
+        "created": datetime.datetime.now().isoformat(timespec="seconds"),
+    }
+
+
+@functools.cache
+def _use_kernel_locator() -> None:
+    """Put a numba cache locator for the files of the softcell package first in numba's
+    list (numba offers no public hook; its locators are tried in order, and this one declines
+    every other file, and any file when the cache cannot be written, as numba's own do)."""
+    from numba.core import caching
+
+    class KernelCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            folder = Path(py_file).resolve().parent.relative_to(_PACKAGE)
+            self._cache_path = str(cache_dir() / KERNELS / folder)
+
+        def get_cache_path(self):
+            return self._cache_path
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not Path(py_file).resolve().is_relative_to(_PACKAGE):
+                return None
+            entry = cache_dir() / KERNELS
+            try:
+                if _marker(entry) is None:
+                    entry.mkdir(parents=True, exist_ok=True)
+                    _write(entry / "entry.json", json.dumps(_kernel_meta(), indent=1) + "\n")
+            except OSError:
+                return None
+            return super().from_function(py_func, py_file)
+
+    caching.CacheImpl._locator_classes.insert(0, KernelCacheLocator)
+
+
 def _meta(label: str, description: str) -> dict[str, str]:
     import numba
 
@@ -245,10 +307,18 @@ def entries(root: Path | None = None) -> list[Entry]:
                 str(meta.get("description", "")),
                 str(meta["created"]),
                 size,
-                meta.get("environment") != current,
+                _stale(meta, current),
             )
         )
     return sorted(out, key=lambda e: e.created)
+
+
+def _stale(meta: dict[str, str], environment: str) -> bool:
+    import numba
+
+    if meta["label"] == KERNELS:
+        return (meta.get("softcell"), meta.get("numba")) != (__version__, numba.__version__)
+    return meta.get("environment") != environment
 
 
 def clear(root: Path | None = None, stale_only: bool = False) -> int:
