@@ -183,7 +183,6 @@ class DiskStore:
             _write(path, _stored_text(source))
         return str(path)
 
-
     def cache_kernels(self) -> None:
         """Have numba keep the cache files of softcell's own compiled functions (kernels,
         built-in components) in the entry :data:`KERNELS` of this cache, not beside their
