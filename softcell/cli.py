@@ -394,7 +394,8 @@ def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
         "--overwrite",
         action="store_true",
-        help="recompute what the directory holds from another seed or version",
+        help="recompute what the directory holds from another seed or version, or write "
+        "into a non-empty directory the study did not make",
     )
     p.add_argument("--seed", type=int, default=0, help="root seed of every variant")
     p.add_argument("--workers", type=int, help="local worker processes (default: every core)")
