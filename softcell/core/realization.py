@@ -88,14 +88,9 @@ def run_realization(
     state = stepper.start(modes, pose, schedule)
     rec_modes = np.empty((times.size, modes.size), dtype=np.complex128)
     rec_pose = np.empty((times.size, 3))
-    first = 0
-    saved = checkpoint.load() if checkpoint is not None else None
-    if saved is not None:
-        first = saved.next_sample
-        rec_modes[:first], rec_pose[:first] = saved.modes_record, saved.pose_record
-        state = {k: v.copy() for k, v in saved.state.items()}
-        if progress:
-            progress(float(times[first - 1]))
+    first, state = _resume(checkpoint, state, rec_modes, rec_pose)
+    if first and progress:
+        progress(float(times[first - 1]))
     last_save = time.monotonic()
     if first == 0:
         check_state(state, model, label)
@@ -130,6 +125,22 @@ def run_realization(
             + ("; rerun the same command to resume" if checkpoint else "")
         ) from None
     return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
+
+
+def _resume(
+    checkpoint: Checkpoint | None,
+    state: dict[str, np.ndarray],
+    rec_modes: np.ndarray,
+    rec_pose: np.ndarray,
+) -> tuple[int, dict[str, np.ndarray]]:
+    """The first sample still to compute and the state to compute it from: the checkpoint's
+    (its samples copied into the records), or 0 and ``state``."""
+    saved = checkpoint.load() if checkpoint is not None else None
+    if saved is None:
+        return 0, state
+    first = saved.next_sample
+    rec_modes[:first], rec_pose[:first] = saved.modes_record, saved.pose_record
+    return first, {k: v.copy() for k, v in saved.state.items()}
 
 
 def _sample_checked(

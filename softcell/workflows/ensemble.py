@@ -238,6 +238,20 @@ def simulate(
     return [Path(t.path) for t in tasks]
 
 
+def _say_removals(resume, out: Path, log: Callable[[str], None] | None) -> None:
+    """Say which files a run removes: each damaged one (always, even without a log), and
+    those --overwrite replaces."""
+    for path, why in resume.damaged:
+        (log or _warn)(f"{path} was made for this request but {why}: recomputing it")
+    overwritten = [p for p in resume.remove if p not in {d for d, _ in resume.damaged}]
+    if overwritten and log:
+        names = [p.name for p in overwritten]
+        log(
+            f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
+            f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})"
+        )
+
+
 def _run(
     tasks: list[Task],
     out: Path,
@@ -255,15 +269,7 @@ def _run(
 
     resume = resume_plan(tasks, out, overwrite=overwrite)
     check_writable(out, expected_bytes(resume.todo))
-    for path, why in resume.damaged:  # never silently, even without a log
-        (log or _warn)(f"{path} was made for this request but {why}: recomputing it")
-    overwritten = [p for p in resume.remove if p not in {d for d, _ in resume.damaged}]
-    if overwritten and log:
-        names = [p.name for p in overwritten]
-        log(
-            f"--overwrite: removing {len(names)} file(s) of {out} that do not match this "
-            f"request ({', '.join(names[:3])}{', ...' if len(names) > 3 else ''})"
-        )
+    _say_removals(resume, out, log)
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     todo = resume.todo
     with _progress_bar(todo, progress) as bar:

@@ -1,26 +1,57 @@
-"""The paper's findings beside ours: each a measured value and a verdict computed from the
-numbers, with the rule the verdict follows (:func:`findings`)."""
+"""The paper's findings beside ours: measured numbers with their errors, a rule that tests
+them, a verdict, and for every verdict but "agrees" its cause (:func:`findings`).
+
+Errors are standard errors from a bootstrap over realizations
+(:mod:`softcell.core.analysis.bootstrap`), so that a fit, a ratio of pooled sums or the
+position of a maximum carries one like a mean does. A rule is a test on those numbers that
+the data could fail; where a finding follows from how it is measured rather than from the
+physics, the verdict says "holds by construction" and the cause says why. A cause is what
+was measured to produce the verdict, or "unexplained".
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import NamedTuple
+import json
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from softcell.core.schema import REGIME_NAMES
 
+#: The verdicts a finding may take.
+VERDICTS = ("agrees", "partly", "differs", "holds by construction", "not measured")
+
+#: Standard errors by which a step of a trend may go against it and still count as noise.
+NOISE = 2.0
+
 
 @dataclass(frozen=True)
 class Finding:
-    """One row of the findings table."""
+    """One row of the findings table.
+
+    ``values`` and ``uncertainties`` (standard errors, same keys; None where none is
+    estimated) hold the measured numbers in ``unit`` (one unit, or one per key); ``rule``
+    states the test the verdict follows; ``cause`` is the measured reason for any verdict but
+    "agrees" (or "unexplained"), empty for "agrees"; ``measured`` is the same in words.
+    """
 
     topic: str
     paper: str
     measured: str
-    verdict: str  # "agrees", "differs", "partly" or "not measured"
-    rule: str  # how the verdict follows from the numbers
+    verdict: str
+    rule: str
+    values: dict[str, Any] = field(default_factory=dict)
+    uncertainties: dict[str, Any] = field(default_factory=dict)
+    unit: str | dict[str, str] = ""
+    cause: str = ""
+
+    def __post_init__(self) -> None:
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"verdict {self.verdict!r} is not one of {VERDICTS}")
+        if self.verdict != "agrees" and not self.cause:
+            raise ValueError(f"the finding {self.topic!r} ({self.verdict}) states no cause")
 
 
 def cell_values(analysis: xr.Dataset, name: str) -> np.ndarray:
@@ -29,47 +60,36 @@ def cell_values(analysis: xr.Dataset, name: str) -> np.ndarray:
     return np.asarray(analysis[name].sel(body="cell").values, dtype=float)
 
 
-def _trend(radii: np.ndarray, values: np.ndarray) -> tuple[float, float]:
-    from scipy.stats import spearmanr
-
-    ok = np.isfinite(values)
-    if ok.sum() < 3 or np.ptp(values[ok]) == 0:
-        return np.nan, np.nan  # no trend to rank
-    result = spearmanr(radii[ok], values[ok])
-    return float(result.statistic), float(result.pvalue)
+def _numbers(values: np.ndarray) -> list[float | None]:
+    """JSON-ready floats (None for NaN)."""
+    return [float(v) if np.isfinite(v) else None for v in np.ravel(values)]
 
 
-def _trend_finding(
-    topic: str, paper: str, radii: np.ndarray, values: np.ndarray, unit: str, sign: int
-) -> Finding:
-    rho, p = _trend(radii, values)
-    word = "increasing" if sign > 0 else "decreasing"
-    measured = (
-        f"{values[0]:.3g} {unit} at R = {radii[0]:g} cm, {values[-1]:.3g} {unit} at "
-        f"{radii[-1]:g} cm; Spearman rho = {rho:+.2f} (p = {p:.2g})"
-    )
-    if not np.isfinite(rho):
-        verdict = "not measured"
-    else:
-        verdict = "agrees" if sign * rho > 0 and p < 0.05 else "differs"
-    return Finding(
-        topic,
-        paper,
-        measured,
-        verdict,
-        f"{word}: Spearman rank correlation with R of sign {sign:+d} and p < 0.05",
-    )
+def _pm(value: float, error: float, spec: str = ".3g") -> str:
+    if not np.isfinite(error):
+        return f"{value:{spec}}"
+    return f"{value:{spec}} ± {error:.2g}"
 
 
-class _Sweep(NamedTuple):
+class _Sweep:
     """What every finding reads: the analysis of a radius sweep, the free bot's (or None),
-    the radii (cm), the regime code and the bot-cell GC distance / R per radius."""
+    the radii (cm), the regime per radius, the bot-cell GC distance / R, and the bootstrap
+    estimates of the cell's quantities."""
 
-    analysis: xr.Dataset
-    free_bot: xr.Dataset | None
-    radii: np.ndarray
-    regime: np.ndarray
-    ratio: np.ndarray
+    def __init__(self, analysis: xr.Dataset, free_bot: xr.Dataset | None, seed: int) -> None:
+        from softcell.core.analysis.bootstrap import sweep_estimates
+
+        self.analysis, self.free_bot, self.seed = analysis, free_bot, seed
+        self.radii = np.asarray(analysis["radius"].values, dtype=float)
+        self.regime = np.asarray(analysis["regime"].values, dtype=int)
+        self.ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
+        self.estimates = sweep_estimates(analysis, seed)
+
+    def at(self) -> str:
+        return ", ".join(f"{r:g}" for r in self.radii)
+
+
+# -- the regimes --------------------------------------------------------------------------------
 
 
 def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
@@ -88,224 +108,539 @@ def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
 def _regime_findings(sweep: _Sweep) -> list[Finding]:
     """The regime per radius."""
     radii, regime, ratio = sweep.radii, sweep.regime, sweep.ratio
-    rows: list[Finding] = []
     names = ", ".join(
         f"{r:g}: {REGIME_NAMES[g]} ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)
     )
     verdict = _regime_verdict(radii, regime)
-    rows.append(
+    cause = ""
+    if verdict == "partly":
+        off = [f"{r:g} cm ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)]
+        off = [o for o, r, g in zip(off, radii, regime, strict=True) if r == 5.0 and g != 0]
+        cause = (
+            f"the bot-cell GC distance / R at {', '.join(off) or 'R = 5 cm'} exceeds the "
+            "coupled threshold 0.35, which is ours, not the paper's (its definition, go "
+            "phases of the cell matching the bot's runs, is not measured here)"
+        )
+    elif verdict != "agrees":
+        cause = "unexplained" if verdict == "differs" else "the sweep lacks 4, 5 or >= 12 cm"
+    return [
         Finding(
             "regime per R",
             "coupled at R = 4 and 5 cm, a continuous crossover, decoupled at large R (12 cm shown)",
             f"R (cm): regime (bot-cell GC distance / R): {names}",
             verdict,
             "agrees: 4 and 5 cm coupled, >= 12 cm decoupled, regimes in order of R; "
-            "partly: 4 cm coupled and >= 12 cm decoupled",
+            "partly: 4 cm coupled and >= 12 cm decoupled (coupled: GC distance / R < 0.35, "
+            "decoupled: > 0.5)",
+            values={"radius": _numbers(radii), "gc_distance_ratio": _numbers(ratio)},
+            uncertainties={"radius": None, "gc_distance_ratio": None},
+            unit={"radius": "cm", "gc_distance_ratio": "1"},
+            cause=cause,
         )
+    ]
+
+
+# -- trends against R ---------------------------------------------------------------------------
+
+
+def _trend_test(
+    radii: np.ndarray, value: np.ndarray, error: np.ndarray, sign: int
+) -> tuple[float, float, list[str]]:
+    """Kendall's tau of the per-radius values against R, its exact one-sided p-value in the
+    direction ``sign`` (10 means: p >= 1/10! ~ 2.8e-7), and the steps between neighbouring
+    radii that go against ``sign`` by more than NOISE standard errors."""
+    from scipy.stats import kendalltau
+
+    ok = np.isfinite(value)
+    r, v, e = radii[ok], value[ok], error[ok]
+    if ok.sum() < 3 or np.ptp(v) == 0:
+        return np.nan, np.nan, []
+    exact = np.unique(v).size == v.size  # the exact null has no ties
+    result = kendalltau(
+        r, v, method="exact" if exact else "auto", alternative="greater" if sign > 0 else "less"
     )
-    return rows
+    steps = np.diff(v)
+    noise = NOISE * np.hypot(e[1:], e[:-1])
+    against = [
+        f"{r[k]:g} -> {r[k + 1]:g} cm ({steps[k]:+.3g}, {abs(steps[k]) / (noise[k] / NOISE):.1f}"
+        " SE)"
+        for k in range(steps.size)
+        if sign * steps[k] < 0 and not abs(steps[k]) <= noise[k]  # a NaN error counts
+    ]
+    return float(result.statistic), float(result.pvalue), against
+
+
+def _trend_finding(
+    topic: str, paper: str, sweep: _Sweep, name: str, unit: str, sign: int
+) -> Finding:
+    est = sweep.estimates[name]
+    radii = sweep.radii
+    tau, p, against = _trend_test(radii, est.value, est.error, sign)
+    word = "increasing" if sign > 0 else "decreasing"
+    listed = ", ".join(
+        f"{r:g}: {_pm(v, e)}" for r, v, e in zip(radii, est.value, est.error, strict=True)
+    )
+    measured = f"{listed} {unit}; Kendall tau = {tau:+.2f} (exact one-sided p = {p:.2g})"
+    if against:
+        measured += "; against the trend beyond noise: " + "; ".join(against)
+    if not np.isfinite(tau):
+        verdict, cause = "not measured", "fewer than 3 radii with a value"
+    elif p < 0.05 and not against:
+        verdict, cause = "agrees", ""
+    elif p < 0.05:
+        verdict, cause = "partly", "not monotonic: " + "; ".join(against) + "; unexplained"
+    else:
+        verdict, cause = "differs", f"no {word} trend (p = {p:.2g}); unexplained"
+    return Finding(
+        topic,
+        paper,
+        measured,
+        verdict,
+        f"{word}: Kendall's tau of the per-radius values against R of sign {sign:+d} with "
+        f"exact one-sided p < 0.05, and no step between neighbouring radii against it by "
+        f"more than {NOISE:g} standard errors (partly: only the first)",
+        values={"radius": _numbers(radii), name: _numbers(est.value)},
+        uncertainties={"radius": None, name: _numbers(est.error)},
+        unit={"radius": "cm", name: unit},
+        cause=cause,
+    )
+
+
+def _go_duration_finding(sweep: _Sweep) -> Finding:
+    """<tau_g>: longest in the intermediate regime, flat in the decoupled one."""
+    est, radii, regime = sweep.estimates["mean_go_duration"], sweep.radii, sweep.regime
+    value, error = est.value, est.error
+    finite = np.isfinite(value)
+    listed = ", ".join(f"{r:g}: {_pm(v, e)}" for r, v, e in zip(radii, value, error, strict=True))
+    values = {"radius": _numbers(radii), "mean_go_duration": _numbers(value)}
+    errors = {"radius": None, "mean_go_duration": _numbers(error)}
+    rule = (
+        "agrees: the largest <tau_g> lies in the intermediate regime and exceeds that of the "
+        f"smallest R by more than {NOISE:g} standard errors, and the decoupled radii spread "
+        "< 10 % of their mean; partly: only the excess over the smallest R"
+    )
+    if not finite.any():
+        return Finding(
+            "<tau_g> against R",
+            "grows beyond the coupled state, longest in the intermediate regime, saturates "
+            "in the decoupled regime",
+            "no go phase",
+            "not measured",
+            rule,
+            values,
+            errors,
+            {"radius": "cm", "mean_go_duration": "s"},
+            "no complete go phase in the records",
+        )
+    peak = int(np.nanargmax(value))
+    dec = regime == 2
+    spread = (np.nanstd(value[dec]) / np.nanmean(value[dec])) if dec.sum() >= 2 else np.nan
+    excess = value[peak] - value[0]
+    grows = excess > NOISE * np.hypot(error[peak], error[0])
+    if grows and regime[peak] == 1 and spread < 0.1:
+        verdict, cause = "agrees", ""
+    elif grows:
+        verdict = "partly"
+        cause = (
+            f"the longest <tau_g> is at R = {radii[peak]:g} cm "
+            f"({REGIME_NAMES[regime[peak]]}) or the decoupled radii spread {spread:.1%}; "
+            "unexplained"
+        )
+    else:
+        verdict = "differs"
+        cause = (
+            f"<tau_g> is longest at R = {radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}); "
+            "unexplained: the paper's mechanism (the membrane constricting the bot's "
+            "orientation) is not measured here"
+        )
+    return Finding(
+        "<tau_g> against R",
+        "grows beyond the coupled state, longest in the intermediate regime, saturates in "
+        "the decoupled regime",
+        f"{listed} s; largest at R = {radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}); "
+        f"spread over the decoupled radii {spread:.1%} of their mean",
+        verdict,
+        rule,
+        values,
+        errors,
+        {"radius": "cm", "mean_go_duration": "s"},
+        cause,
+    )
 
 
 def _trend_findings(sweep: _Sweep) -> list[Finding]:
     """<tau_s>, <tau_g>, the ballistic velocity and D hat against R."""
-    analysis, radii, regime = sweep.analysis, sweep.radii, sweep.regime
-    rows: list[Finding] = []
-    rows.append(
+    return [
         _trend_finding(
             "<tau_s> against R",
             "increases monotonically with R",
-            radii,
-            cell_values(analysis, "mean_stop_duration"),
+            sweep,
+            "mean_stop_duration",
             "s",
             +1,
-        )
-    )
-    tau_g = cell_values(analysis, "mean_go_duration")
-    if np.isfinite(tau_g).any():
-        peak = int(np.nanargmax(tau_g))
-        dec = regime == 2
-        spread = (np.nanstd(tau_g[dec]) / np.nanmean(tau_g[dec])) if dec.sum() >= 2 else np.nan
-        grows = tau_g[peak] > tau_g[0]
-        verdict = (
-            "agrees"
-            if grows and regime[peak] == 1 and spread < 0.1
-            else ("partly" if grows else "differs")
-        )
-        rows.append(
-            Finding(
-                "<tau_g> against R",
-                "grows beyond the coupled state, longest in the intermediate "
-                "regime, saturates in the decoupled regime",
-                f"{tau_g[0]:.3g} s at R = {radii[0]:g} cm; largest {tau_g[peak]:.3g} s at R = "
-                f"{radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}); spread over the decoupled "
-                f"radii {spread:.1%} of their mean",
-                verdict,
-                "agrees: the largest <tau_g> exceeds that of the smallest R, lies in the "
-                "intermediate regime, and the decoupled radii spread < 10 %; partly: only the "
-                "first",
-            )
-        )
-    rows.append(
+        ),
+        _go_duration_finding(sweep),
         _trend_finding(
             "ballistic velocity against R",
             "decreases with R (Fig. 4a)",
-            radii,
-            cell_values(analysis, "ballistic_velocity"),
+            sweep,
+            "ballistic_velocity",
             "cm/s",
             -1,
-        )
-    )
-    rows.append(
+        ),
         _trend_finding(
             "D hat (fitted MSD slope) against R",
             "decreases with R (Fig. 4b)",
-            radii,
-            cell_values(analysis, "msd_slope"),
+            sweep,
+            "msd_slope",
             "cm2/s",
             -1,
-        )
-    )
-    return rows
+        ),
+    ]
+
+
+# -- the scaling collapse -----------------------------------------------------------------------
 
 
 def _collapse_findings(sweep: _Sweep) -> list[Finding]:
-    """The scaling collapse of the decoupled radii."""
-    analysis = sweep.analysis
-    rows: list[Finding] = []
-    if "collapse_metric" in analysis:
-        metric = np.asarray(analysis["collapse_metric"].values, dtype=float)
-        variants = [str(v) for v in analysis["collapse_variant"].values]
-        paper = int(
-            np.flatnonzero(
-                (analysis["collapse_msd_exponent"].values > 0)
-                & (analysis["collapse_lag_exponent"].values < 0)
-            )[0]
-        )
-        if np.isfinite(metric).any():
-            order = np.argsort(np.where(np.isfinite(metric), metric, np.inf))
-            listed = "; ".join(f"{variants[k]}: {metric[k]:.3f}" for k in order)
-            verdict = "agrees" if order[0] == paper else "differs"
-        else:
-            listed, verdict = "fewer than two decoupled radii", "not measured"
-        radii_used = np.atleast_1d(analysis["collapse_metric"].attrs.get("radii", []))
-        rows.append(
+    """The exponents that collapse the decoupled radii's MSDs, fitted freely."""
+    from softcell.core.analysis.bootstrap import collapse_fit
+
+    paper = "ballistic and crossover MSDs of the decoupled radii collapse with MSD R^(1/3) "
+    paper += "against lag R^(-1)"
+    rule = (
+        "agrees: (1/3, -1) lies inside the 95 % bootstrap intervals of both freely fitted "
+        "exponents (a, b) of MSD R^a against lag R^b; partly: outside them, but it collapses "
+        "best of the four pairs (+-1/3, +-1); differs: neither"
+    )
+    fit = collapse_fit(sweep.analysis, sweep.estimates["msd_samples"])
+    if fit is None:
+        return [
             Finding(
                 "scaling collapse",
-                "ballistic and crossover MSDs of the decoupled radii collapse "
-                "with MSD R^(1/3) against lag R^(-1)",
-                f"spread in decades over R = {', '.join(f'{r:g}' for r in radii_used)} cm, best "
-                f"first: {listed}",
-                verdict,
-                "agrees: the paper's variant has the smallest spread of the four",
+                paper,
+                "fewer than two decoupled radii",
+                "not measured",
+                rule,
+                cause="fewer than two decoupled radii",
             )
+        ]
+    (a_lo, a_hi), (b_lo, b_hi) = fit.interval()
+    a, b = fit.exponents
+    error = np.nanstd(fit.samples, axis=0, ddof=1)
+    best_pair = min(fit.candidates, key=lambda k: np.nan_to_num(fit.candidates[k], nan=np.inf))
+    inside = a_lo <= 1 / 3 <= a_hi and b_lo <= -1 <= b_hi
+    ranked = "; ".join(
+        f"({x:+.3g}, {y:+g}): {s:.3f}"
+        for (x, y), s in sorted(fit.candidates.items(), key=lambda kv: kv[1])
+    )
+    if inside:
+        verdict, cause = "agrees", ""
+    elif best_pair == (1 / 3, -1.0):
+        verdict = "partly"
+        cause = (
+            f"the free fit prefers a = {a:.2f} [{a_lo:.2f}, {a_hi:.2f}], b = {b:.2f} "
+            f"[{b_lo:.2f}, {b_hi:.2f}]; unexplained"
         )
-    return rows
+    else:
+        verdict, cause = "differs", "another of the four pairs collapses better; unexplained"
+    radii = np.asarray(sweep.radii[sweep.regime == 2])
+    return [
+        Finding(
+            "scaling collapse",
+            paper,
+            f"free fit over R = {', '.join(f'{r:g}' for r in radii)} cm: a = {_pm(a, error[0])} "
+            f"(95 %: {a_lo:.2f} to {a_hi:.2f}), b = {_pm(b, error[1])} ({b_lo:.2f} to "
+            f"{b_hi:.2f}), spread {fit.spread:.3f} decades; the four pairs, best first: "
+            f"{ranked}",
+            verdict,
+            rule,
+            values={"a": float(a), "b": float(b), "spread": fit.spread},
+            uncertainties={"a": float(error[0]), "b": float(error[1]), "spread": None},
+            unit="1",
+            cause=cause,
+        )
+    ]
+
+
+# -- the theory ---------------------------------------------------------------------------------
 
 
 def _theory_findings(sweep: _Sweep) -> list[Finding]:
     """The theory's v0 hat and D hat against the fits."""
-    analysis, radii = sweep.analysis, sweep.radii
+    analysis, radii, est = sweep.analysis, sweep.radii, sweep.estimates
     rows: list[Finding] = []
-    fit, theory = cell_values(analysis, "ballistic_velocity"), cell_values(analysis, "v0_hat")
-    dev = np.abs(fit / theory - 1)
+    fit, theory = est["ballistic_velocity"], est["v0_hat"]
+    q = fit.value / theory.value
+    q_err = _error_of(fit.samples / theory.samples)
+    lags = np.asarray(analysis["lag"].values, dtype=float)
+    window = cell_values(analysis, "ballistic_window_end")
+    points = [int(np.sum((lags > 0) & (lags <= w))) for w in window]
     rows.append(
         Finding(
             "theory: v0 hat against the ballistic fit",
             "consistent (Fig. 4a)",
-            f"|fit / v0_hat - 1| <= {np.nanmax(dev):.1%} over all R "
-            f"(median {np.nanmedian(dev):.1%})",
-            "agrees" if np.nanmax(dev) < 0.1 else "differs",
-            "agrees: within 10 % at every R",
+            "fit / v0_hat: "
+            + ", ".join(
+                f"{r:g}: {_pm(v, e, '.4f')}" for r, v, e in zip(radii, q, q_err, strict=True)
+            )
+            + f"; the fit used {min(points)} to {max(points)} lags",
+            "holds by construction",
+            "none can fail: see the cause",
+            values={"radius": _numbers(radii), "ratio": _numbers(q)},
+            uncertainties={"radius": None, "ratio": _numbers(q_err)},
+            unit={"radius": "cm", "ratio": "1"},
+            cause=(
+                "the ballistic fit uses lags <= 0.1 <tau_g> of the 0.01 s samples from which "
+                "v0_hat is the RMS speed, so its first lag is MSD(dt) = <v^2> dt^2 = "
+                "v0_hat^2 dt^2 exactly, and the few lags after it are close to it"
+            ),
         )
     )
-    fit, theory = cell_values(analysis, "msd_slope"), cell_values(analysis, "msd_slope_theory")
-    q = fit / theory
+    fit, theory_d = est["msd_slope"], cell_values(analysis, "msd_slope_theory")
+    # D hat's theory is 2 v0_hat^2 <tau_g>: resampled with the same realizations as the fit
+    tau_g = est["mean_go_duration"]
+    resampled_theory = (
+        theory_d * (theory.samples / theory.value) ** 2 * (tau_g.samples / tau_g.value)
+    )
+    ratio = fit.value / theory_d
+    ratio_err = _error_of(fit.samples / resampled_theory)
+    low, high = 0.5, 2.0
+    in_band = np.abs(np.log(ratio)) <= np.log(high) + NOISE * ratio_err / ratio
     big = radii >= 10
+    above = ratio - NOISE * ratio_err > 1
+    band_ok = bool(np.all(in_band[np.isfinite(ratio)]))
+    large_ok = bool(big.any() and np.all(above[big]))
+    if band_ok and large_ok:
+        verdict, cause = "agrees", ""
+    elif band_ok or large_ok:
+        verdict = "partly"
+        outside = [f"{r:g}" for r, ok in zip(radii, in_band, strict=True) if not ok]
+        cause = (
+            (
+                f"fit / theory leaves [{low:g}, {high:g}] at R = {', '.join(outside)} cm: "
+                if outside
+                else ""
+            )
+            + "the offset grows with R; the paper's explanation (velocity correlations the "
+            "exponential-phase theory misses) is not tested here: unexplained"
+        )
+    else:
+        verdict, cause = "differs", "unexplained"
     rows.append(
         Finding(
             "theory: D hat against the fitted MSD slope",
-            "fair overall agreement; at large R the "
-            "theory falls below the fits (it underestimates velocity correlations)",
-            "fit / theory: " + ", ".join(f"{r:g}: {v:.2f}" for r, v in zip(radii, q, strict=True)),
-            "agrees" if big.any() and np.all(q[big] > 1) else "differs",
-            "agrees: fit / theory > 1 at every R >= 10 cm",
+            "fair overall agreement; at large R the theory falls below the fits (it "
+            "underestimates velocity correlations)",
+            "fit / theory: "
+            + ", ".join(
+                f"{r:g}: {_pm(v, e, '.2f')}"
+                for r, v, e in zip(radii, ratio, ratio_err, strict=True)
+            ),
+            verdict,
+            f"agrees: fit / theory within [{low:g}, {high:g}] (a factor 2, our reading of 'fair') "
+            f"at every R within {NOISE:g} SE, and above 1 by more than {NOISE:g} SE at every "
+            "R >= 10 cm; partly: one of the two",
+            values={"radius": _numbers(radii), "ratio": _numbers(ratio)},
+            uncertainties={"radius": None, "ratio": _numbers(ratio_err)},
+            unit={"radius": "cm", "ratio": "1"},
+            cause=cause,
         )
     )
     return rows
+
+
+def _error_of(samples: np.ndarray) -> np.ndarray:
+    from softcell.core.analysis.bootstrap import _error
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return _error(samples)
+
+
+# -- durations ----------------------------------------------------------------------------------
+
+
+#: Monte Carlo samples of the exponential null of the duration test.
+NULL_SAMPLES = 199
+
+
+def exponential_test(durations: np.ndarray, interval: float, seed: int) -> tuple[float, float]:
+    """Kolmogorov-Smirnov distance of ``durations`` (s) from an exponential of their mean,
+    and its p-value from ``NULL_SAMPLES`` samples of the null: exponential durations of the
+    same mean and number, measured as the detector measures them (whole ``interval`` steps
+    between sample times, so the mean is estimated and the sampling is accounted for).
+    NaN for fewer than 10 durations."""
+    from scipy import stats
+
+    d = np.asarray(durations, dtype=float)
+    d = d[np.isfinite(d)]
+    if d.size < 10 or not d.mean() > 0:
+        return np.nan, np.nan
+
+    def distance(sample: np.ndarray) -> float:
+        return float(stats.kstest(sample / sample.mean(), "expon").statistic)
+
+    observed = distance(d)
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(2**31 - 2,)))
+    # A phase lasting a continuous time T covers floor(T / dt) whole intervals; solve the
+    # mean so the measured durations keep the observed mean.
+    scale = max(d.mean() + interval / 2, interval)
+    null = np.empty(NULL_SAMPLES)
+    for k in range(NULL_SAMPLES):
+        sample = interval * np.floor(rng.exponential(scale, d.size) / interval)
+        null[k] = distance(sample) if sample.mean() > 0 else np.nan
+    return observed, float((1 + np.sum(null >= observed)) / (1 + np.isfinite(null).sum()))
 
 
 def _duration_findings(sweep: _Sweep) -> list[Finding]:
     """The stop and go durations' distributions."""
-    analysis = sweep.analysis
-    rows: list[Finding] = []
-    ks_go, ks_stop = (
-        cell_values(analysis, "go_ks_statistic"),
-        cell_values(analysis, "stop_ks_statistic"),
-    )
-    rows.append(
-        Finding(
-            "stop and go durations",
-            "exponential in experiments; in simulations the go phases "
-            "deviate at short times (the membrane's finite relaxation)",
-            f"Kolmogorov-Smirnov distance of t/<t> to exp(-t'), median over R: go "
-            f"{np.nanmedian(ks_go):.2f}, stop {np.nanmedian(ks_stop):.2f} (Fig. S2)",
-            "not measured",
-            "a reading of Fig. S2; no verdict is computed",
+    analysis, radii = sweep.analysis, sweep.radii
+    time = np.asarray(analysis["time"].values, dtype=float)
+    interval = float(np.min(np.diff(time)))
+    stats_ = {"go": [], "stop": []}
+    for kind in stats_:
+        data = np.asarray(analysis[f"{kind}_duration"].sel(body="cell").values, dtype=float)
+        for i in range(radii.size):
+            stats_[kind].append(exponential_test(data[i], interval, sweep.seed))
+    ks = {k: np.array([s[0] for s in v]) for k, v in stats_.items()}
+    p = {k: np.array([s[1] for s in v]) for k, v in stats_.items()}
+    go_off = bool(np.all(p["go"][np.isfinite(p["go"])] < 0.05)) and np.isfinite(p["go"]).any()
+    stop_exp = bool(np.all(p["stop"][np.isfinite(p["stop"])] >= 0.05))
+    if not np.isfinite(p["go"]).any():
+        verdict, cause = "not measured", "fewer than 10 go phases per radius"
+    elif go_off and stop_exp:
+        verdict, cause = "agrees", ""
+    elif go_off:
+        verdict = "partly"
+        cause = (
+            "the stop durations are not exponential either (median KS distance "
+            f"{np.nanmedian(ks['stop']):.2f}); unexplained (the drive's uniform run and "
+            "tumble durations are a suspect, not shown)"
         )
-    )
-    return rows
+    else:
+        verdict, cause = "differs", "the go durations are exponential; unexplained"
+    return [
+        Finding(
+            "stop and go durations (simulations)",
+            "exponential in experiments; in simulations the go phases deviate at short "
+            "times (the membrane's finite relaxation)",
+            f"KS distance of t / <t> from exp(-t'), median over R: go "
+            f"{np.nanmedian(ks['go']):.2f} (largest p = {np.nanmax(p['go']):.2g}), stop "
+            f"{np.nanmedian(ks['stop']):.2f} (largest p = {np.nanmax(p['stop']):.2g}); the "
+            "experiments' claim is not tested here (Fig. S2)",
+            verdict,
+            "agrees: at every R the go durations reject an exponential (p < 0.05) and the "
+            "stop durations do not; p from a Monte Carlo null of exponential durations with "
+            f"the measured mean and count, measured on the {interval:g} s sampling grid "
+            f"({NULL_SAMPLES} samples: p >= {1 / (NULL_SAMPLES + 1):.3f})",
+            values={
+                "radius": _numbers(radii),
+                "go_ks": _numbers(ks["go"]),
+                "go_p": _numbers(p["go"]),
+                "stop_ks": _numbers(ks["stop"]),
+                "stop_p": _numbers(p["stop"]),
+            },
+            uncertainties={k: None for k in ("radius", "go_ks", "go_p", "stop_ks", "stop_p")},
+            unit={"radius": "cm", "go_ks": "1", "go_p": "1", "stop_ks": "1", "stop_p": "1"},
+            cause=cause,
+        )
+    ]
+
+
+# -- the bot inside the membrane ----------------------------------------------------------------
 
 
 def _bot_msd_findings(sweep: _Sweep) -> list[Finding]:
     """The bot's MSD inside the membrane against the free bot's."""
-    analysis, free_bot = sweep.analysis, sweep.free_bot
-    rows: list[Finding] = []
-    if free_bot is not None:
-        lag = analysis["lag"].values
-        free = free_bot["msd"].sel(body="bot")
-        free = np.asarray(free.isel({d: 0 for d in free.dims if d != "lag"}).values)
-        bot = np.asarray(analysis["msd"].sel(body="bot").values)
-        k_short = int(np.argmin(np.abs(lag - 0.1)))
-        k_long = int(np.argmin(np.abs(lag - 10.0)))
-        short = bot[:, k_short] / free[k_short]
-        long = bot[:, k_long] / free[k_long]
-        rows.append(
-            Finding(
-                "bot MSD inside the membrane (S1)",
-                "almost unaffected by the membrane",
-                f"bot in membrane / free bot at lag {lag[k_short]:.2g} s: "
-                f"{np.nanmin(short):.2f} to "
-                f"{np.nanmax(short):.2f}; at {lag[k_long]:.3g} s: {np.nanmin(long):.2f} to "
-                f"{np.nanmax(long):.2f} (over R)",
-                "agrees" if np.nanmin(short) > 0.5 else "differs",
-                "agrees: the short-lag ratio stays above 0.5 at every R",
-            )
+    analysis, free_bot, radii = sweep.analysis, sweep.free_bot, sweep.radii
+    if free_bot is None:
+        return []
+    lag = analysis["lag"].values
+    free = free_bot["msd"].sel(body="bot")
+    free = np.asarray(free.isel({d: 0 for d in free.dims if d != "lag"}).values)
+    bot = np.asarray(analysis["msd"].sel(body="bot").values)
+    sem = np.asarray(analysis["msd_sem"].sel(body="bot").values)
+    k = int(np.argmin(np.abs(lag - 0.1)))
+    short = bot[:, k] / free[k]
+    short_err = sem[:, k] / free[k]  # the free bot's own error is not propagated
+    params = json.loads(analysis.attrs["softcell_parameters"])
+    gamma_t, gamma_mem = float(params["bot_friction"]), float(params["membrane_friction"])
+    # A bot pushing the whole membrane moves at F0 / (gamma_T + gamma_mem l0), l0 = 2 pi R.
+    bound = (gamma_t / (gamma_t + gamma_mem * 2 * np.pi * radii)) ** 2
+    ok = short - NOISE * short_err > 0.5
+    verdict = "agrees" if np.all(ok) else "differs"
+    cause = ""
+    if verdict == "differs":
+        cause = (
+            "measured: a bot pushing the membrane moves at most at F0 / (gamma_T + gamma_mem "
+            "2 pi R) (the friction of the whole ring), so its MSD ratio is at most "
+            + ", ".join(f"{b:.2f}" for b in bound[:2])
+            + f" at R = {', '.join(f'{r:g}' for r in radii[:2])} cm; the ratio reaches 0.5 "
+            "at every R only with gamma_mem below "
+            f"{gamma_t * (1 / np.sqrt(0.5) - 1) / (2 * np.pi * radii[0]):.2g} N s cm-2"
         )
-    return rows
+    return [
+        Finding(
+            "bot MSD inside the membrane (S1)",
+            "almost unaffected by the membrane",
+            f"bot in membrane / free bot at lag {lag[k]:.2g} s: "
+            + ", ".join(
+                f"{r:g}: {_pm(v, e, '.2f')}"
+                for r, v, e in zip(radii, short, short_err, strict=True)
+            )
+            + "; the bound of a bot pushing the whole ring: "
+            + ", ".join(f"{b:.2f}" for b in bound),
+            verdict,
+            f"agrees: the ratio at lag 0.1 s exceeds 0.5 by more than {NOISE:g} SE at every R",
+            values={"radius": _numbers(radii), "ratio": _numbers(short), "bound": _numbers(bound)},
+            uncertainties={"radius": None, "ratio": _numbers(short_err), "bound": None},
+            unit="1",
+            cause=cause,
+        )
+    ]
 
 
 def _merge_findings(sweep: _Sweep) -> list[Finding]:
-    """The bot's and the cell's MSD at R = 12 cm."""
+    """The bot's and the cell's MSD at R = 12 cm: geometry."""
     analysis, radii = sweep.analysis, sweep.radii
-    rows: list[Finding] = []
     i12 = np.flatnonzero(radii == 12.0)
-    if i12.size:
-        msd = analysis["msd"].isel(radius=int(i12[0]))
-        pairs = analysis["msd_pairs"].isel(radius=int(i12[0])).sel(body="cell").values
-        k = int(np.flatnonzero(pairs > 0)[-1])
-        ratio12 = float(msd.sel(body="bot")[k] / msd.sel(body="cell")[k])
-        short12 = float(msd.sel(body="bot")[0] / msd.sel(body="cell")[0])
-        rows.append(
-            Finding(
-                "bot and cell MSD at R = 12 cm (S3)",
-                "distinct at short lags, merge at long lags",
-                f"bot / cell MSD: {short12:.3g} at {float(analysis['lag'][0]):.2g} s, "
-                f"{ratio12:.2f} at {float(analysis['lag'][k]):.3g} s",
-                "agrees" if short12 > 2 and abs(ratio12 - 1) < 0.5 else "differs",
-                "agrees: ratio > 2 at the shortest lag and within 50 % of 1 at the longest",
-            )
+    if not i12.size:
+        return []
+    i = int(i12[0])
+    msd = analysis["msd"].isel(radius=i)
+    pairs = analysis["msd_pairs"].isel(radius=i).sel(body="cell").values
+    k = int(np.flatnonzero(pairs > 0)[-1])
+    cell = float(msd.sel(body="cell")[k])
+    ratio_long = float(msd.sel(body="bot")[k]) / cell
+    ratio_short = float(msd.sel(body="bot")[0] / msd.sel(body="cell")[0])
+    d = float(analysis["gc_distance"].isel(radius=i))
+    # bot = cell + d(t), |d| <= R: MSD_bot = MSD_cell + 2 <d^2> - 2 <d(t) d(0)> ->
+    # MSD_cell + 2 <d^2> once d decorrelates; <d^2> >= <|d|>^2.
+    predicted = 1 + 2 * d**2 / cell
+    return [
+        Finding(
+            "bot and cell MSD at R = 12 cm (S3)",
+            "distinct at short lags, merge at long lags",
+            f"bot / cell MSD: {ratio_short:.3g} at {float(analysis['lag'][0]):.2g} s, "
+            f"{ratio_long:.3f} at {float(analysis['lag'][k]):.3g} s; geometry predicts "
+            f">= {predicted:.3f} there",
+            "holds by construction",
+            "none can fail: see the cause",
+            values={
+                "ratio_short": ratio_short,
+                "ratio_long": ratio_long,
+                "predicted_long": predicted,
+            },
+            uncertainties={"ratio_short": None, "ratio_long": None, "predicted_long": None},
+            unit="1",
+            cause=(
+                "geometry: the bot stays within R of the cell's centre, so MSD_bot / MSD_cell "
+                "-> 1 + 2 <d^2> / MSD_cell (d the bot-GC distance, mean "
+                f"{d:.2f} cm) once the cell has moved farther than R; the merge is not a "
+                "finding about the dynamics"
+            ),
         )
-    return rows
+    ]
 
 
 #: The findings in the order the report lists them.
@@ -320,10 +655,14 @@ FINDINGS = (
 )
 
 
-def findings(analysis: xr.Dataset, free_bot: xr.Dataset | None = None) -> list[Finding]:
-    """The paper's findings beside the measured values of a radius sweep's analysis."""
-    radii = np.asarray(analysis["radius"].values, dtype=float)
-    regime = np.asarray(analysis["regime"].values, dtype=int)
-    ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
-    sweep = _Sweep(analysis, free_bot, radii, regime, ratio)
+def findings(
+    analysis: xr.Dataset, free_bot: xr.Dataset | None = None, seed: int | None = None
+) -> list[Finding]:
+    """The paper's findings beside the measured values of a radius sweep's analysis.
+
+    ``seed`` seeds the bootstraps (default: the analysis' own ``softcell_seed``), so the
+    errors are the same bytes on every rerun.
+    """
+    seed = int(analysis.attrs.get("softcell_seed", 0) if seed is None else seed)
+    sweep = _Sweep(analysis, free_bot, seed)
     return [row for finding in FINDINGS for row in finding(sweep)]

@@ -136,6 +136,28 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
     ]
 
 
+def _findings_blocks(rows) -> list[Block]:
+    """The findings table, then the rule of each verdict."""
+    return [
+        Block("h2", "Findings: the paper beside this run"),
+        Block(
+            "table",
+            (
+                ["finding", "paper", "measured here (± standard error)", "verdict", "cause"],
+                [[f.topic, f.paper, f.measured, f.verdict, f.cause or "-"] for f in rows],
+            ),
+        ),
+        Block(
+            "p",
+            "Errors are standard errors from a bootstrap over realizations (resampled "
+            "within each radius, seeded by the run's seed). Each verdict follows the rule "
+            "below; 'holds by construction' marks a finding that follows from how it is "
+            "measured, whatever the physics.",
+        ),
+        Block("table", (["finding", "verdict rule"], [[f.topic, f.rule] for f in rows])),
+    ]
+
+
 def write_report(
     out: str | os.PathLike[str],
     *,
@@ -207,14 +229,7 @@ def write_report(
                 ],
             ),
         ),
-        Block("h2", "Findings: the paper beside this run"),
-        Block(
-            "table",
-            (
-                ["finding", "paper", "measured here", "verdict", "verdict rule"],
-                [[f.topic, f.paper, f.measured, f.verdict, f.rule] for f in rows],
-            ),
-        ),
+        *_findings_blocks(rows),
         Block("h2", "Per radius (cell GC)"),
         _per_radius(analysis),
     ]

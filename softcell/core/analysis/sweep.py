@@ -141,20 +141,29 @@ def _collapse(lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndar
     if len(radii) < 2:
         return out
     for k, (a, b) in enumerate(COLLAPSE_VARIANTS):
-        curves = []
-        for m, r, end in zip(msd, radii, ends, strict=True):
-            use = (lag <= end) & np.isfinite(m) & (m > 0)
-            if use.sum() < 2:
-                return out
-            curves.append((np.log10(lag[use] * r**b), np.log10(m[use] * r**a)))
-        lo = max(c[0][0] for c in curves)
-        hi = min(c[0][-1] for c in curves)
-        if not hi > lo:
-            continue
-        grid = np.linspace(lo, hi, COLLAPSE_GRID)
-        ys = np.array([np.interp(grid, cx, cy) for cx, cy in curves])
-        out[k] = float(ys.std(axis=0, ddof=1).mean())
+        out[k] = collapse_spread(lag, msd, radii, ends, a, b)
     return out
+
+
+def collapse_spread(
+    lag: np.ndarray, msd: np.ndarray, radii: np.ndarray, ends: np.ndarray, a: float, b: float
+) -> float:
+    """The collapse metric of MSD R^a against lag R^b (decades; see :func:`_collapse`) of the
+    curves ``msd`` [radius, lag] (cm^2) over lags (s) up to ``ends`` [radius]; NaN when a
+    curve has fewer than 2 lags or the curves share no range of scaled lags."""
+    curves = []
+    for m, r, end in zip(msd, radii, ends, strict=True):
+        use = (lag <= end) & np.isfinite(m) & (m > 0)
+        if use.sum() < 2:
+            return np.nan
+        curves.append((np.log10(lag[use] * r**b), np.log10(m[use] * r**a)))
+    lo = max(c[0][0] for c in curves)
+    hi = min(c[0][-1] for c in curves)
+    if len(curves) < 2 or not hi > lo:
+        return np.nan
+    grid = np.linspace(lo, hi, COLLAPSE_GRID)
+    ys = np.array([np.interp(grid, cx, cy) for cx, cy in curves])
+    return float(ys.std(axis=0, ddof=1).mean())
 
 
 #: Per-(point, body) scalars of :func:`_body_statistics` (float, NaN when undefined).
