@@ -436,7 +436,7 @@ def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
         metavar="NAMES",
         help="comma-separated variants to run beside the defaults (default: all: "
         "bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
-        "lambda_1e-4, pivot, coulomb)",
+        "lambda_1e-4, pivot, coulomb, gamma_mem_4.7e-5, torque_1e-3, pivot_coulomb)",
     )
     _add_beyond(p, strict, specs)
     p.set_defaults(func=_cmd_study)

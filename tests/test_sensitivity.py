@@ -68,7 +68,17 @@ def test_the_variants_move_one_unknown_each():
     names = [v.name for v in VARIANTS]
     assert names[0] == "default" and len(set(names)) == len(names)
     unknowns = [v.unknown for v in VARIANTS[1:]]
-    assert sorted(set(unknowns)) == ["bot", "cutoff", "friction", "k", "lambda", "rotation"]
+    assert sorted(set(unknowns)) == [
+        "bot",
+        "cutoff",
+        "friction",
+        "gamma_mem",
+        "k",
+        "lambda",
+        "rotation",
+        "rotation and friction",
+        "torque",
+    ]
     owns = {
         "bot": {"bot_semi_major", "bot_semi_minor"},
         "k": {"bending_stiffness"},
@@ -76,6 +86,14 @@ def test_the_variants_move_one_unknown_each():
         "lambda": {"contact_length"},
         "rotation": {"driving_protocol"},
         "friction": {"friction_law", "membrane_static_friction", "static_friction_width"},
+        "gamma_mem": {"membrane_friction"},
+        "torque": {"drive_torque", "bot_rotational_friction"},
+        "rotation and friction": {
+            "driving_protocol",
+            "friction_law",
+            "membrane_static_friction",
+            "static_friction_width",
+        },
     }
     for v in VARIANTS[1:]:  # what a variant sets belongs to its unknown alone
         assert set(v.parameters) | set(v.components) <= owns[v.unknown]

@@ -105,21 +105,44 @@ def _regime_verdict(radii: np.ndarray, regime: np.ndarray) -> str:
     return "differs"
 
 
+def label_match(analysis: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's own reading of coupling: the fraction of the samples where the cell and
+    the bot are both known in which the cell's stop/go label is the bot's (the cell stops
+    when the bot tumbles, goes when it runs), per radius, with its standard error across
+    realizations."""
+    labels = analysis["stopgo_label"]
+    cell = np.asarray(labels.sel(body="cell").values)
+    bot = np.asarray(labels.sel(body="bot").values)
+    known = (cell >= 0) & (bot >= 0)
+    same = np.where(known, cell == bot, False).sum(axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        each = same / known.sum(axis=-1)  # [radius, realization]
+        n = np.isfinite(each).sum(axis=-1)
+        mean = np.nanmean(each, axis=-1)
+        error = np.where(n >= 2, np.nanstd(each, axis=-1, ddof=1) / np.sqrt(n), np.nan)
+    return mean, error
+
+
 def _regime_findings(sweep: _Sweep) -> list[Finding]:
     """The regime per radius."""
     radii, regime, ratio = sweep.radii, sweep.regime, sweep.ratio
+    match, match_err = label_match(sweep.analysis)
     names = ", ".join(
-        f"{r:g}: {REGIME_NAMES[g]} ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)
+        f"{r:g}: {REGIME_NAMES[g]} ({q:.2f}; {_pm(m, e, '.3f')})"
+        for r, g, q, m, e in zip(radii, regime, ratio, match, match_err, strict=True)
     )
     verdict = _regime_verdict(radii, regime)
     cause = ""
     if verdict == "partly":
         off = [f"{r:g} cm ({q:.2f})" for r, g, q in zip(radii, regime, ratio, strict=True)]
         off = [o for o, r, g in zip(off, radii, regime, strict=True) if r == 5.0 and g != 0]
+        i5 = np.flatnonzero(radii == 5.0)
         cause = (
             f"the bot-cell GC distance / R at {', '.join(off) or 'R = 5 cm'} exceeds the "
-            "coupled threshold 0.35, which is ours, not the paper's (its definition, go "
-            "phases of the cell matching the bot's runs, is not measured here)"
+            "coupled threshold 0.35, which is ours, not the paper's; by the paper's own "
+            "reading, the cell's labels match the bot's in "
+            + (f"{match[i5[0]]:.1%} of the samples at 5 cm" if i5.size else "-")
+            + f" against {match[0]:.1%} at {radii[0]:g} cm"
         )
     elif verdict != "agrees":
         cause = "unexplained" if verdict == "differs" else "the sweep lacks 4, 5 or >= 12 cm"
@@ -127,14 +150,23 @@ def _regime_findings(sweep: _Sweep) -> list[Finding]:
         Finding(
             "regime per R",
             "coupled at R = 4 and 5 cm, a continuous crossover, decoupled at large R (12 cm shown)",
-            f"R (cm): regime (bot-cell GC distance / R): {names}",
+            f"R (cm): regime (bot-cell GC distance / R; fraction of samples whose cell "
+            f"stop/go label is the bot's): {names}",
             verdict,
             "agrees: 4 and 5 cm coupled, >= 12 cm decoupled, regimes in order of R; "
             "partly: 4 cm coupled and >= 12 cm decoupled (coupled: GC distance / R < 0.35, "
             "decoupled: > 0.5)",
-            values={"radius": _numbers(radii), "gc_distance_ratio": _numbers(ratio)},
-            uncertainties={"radius": None, "gc_distance_ratio": None},
-            unit={"radius": "cm", "gc_distance_ratio": "1"},
+            values={
+                "radius": _numbers(radii),
+                "gc_distance_ratio": _numbers(ratio),
+                "label_match": _numbers(match),
+            },
+            uncertainties={
+                "radius": None,
+                "gc_distance_ratio": None,
+                "label_match": _numbers(match_err),
+            },
+            unit={"radius": "cm", "gc_distance_ratio": "1", "label_match": "1"},
             cause=cause,
         )
     ]

@@ -75,6 +75,31 @@ VARIANTS: tuple[Variant, ...] = (
         parameters={"membrane_static_friction": 1e-4, "static_friction_width": 1e-5},
         unknown="friction",
     ),
+    # The bot's MSD inside the ring reaches half the free bot's only below ~4.7e-5 (a bot
+    # pushing the ring moves at F0 / (gamma_T + gamma_mem 2 pi R)).
+    Variant(
+        "gamma_mem_4.7e-5",
+        "gamma_mem = 4.7e-5 N s/cm2",
+        parameters={"membrane_friction": 4.7e-5},
+        unknown="gamma_mem",
+    ),
+    # The drive torque is ~1e3 times any contact torque, so the membrane cannot steer the
+    # bot; both / 1000 keep the tumbles' angular speed T0 / gamma_R and let it.
+    Variant(
+        "torque_1e-3",
+        "T0 and gamma_R / 1000",
+        parameters={"drive_torque": 0.1511, "bot_rotational_friction": 0.0285},
+        unknown="torque",
+    ),
+    # The experiments' conditions: a tumble turns the bot about a pivot, on a floor with
+    # static friction.
+    Variant(
+        "pivot_coulomb",
+        "pivot tumbles and coulomb friction",
+        components={"driving_protocol": "pivot_run_and_tumble", "friction_law": "coulomb"},
+        parameters={"membrane_static_friction": 1e-4, "static_friction_width": 1e-5},
+        unknown="rotation and friction",
+    ),
 )
 #: What the defaults are, per unknown (for the tables' legends).
 DEFAULTS = {
@@ -84,6 +109,9 @@ DEFAULTS = {
     "lambda": "0.01 cm",
     "rotation": "about the centre",
     "friction": "viscous",
+    "gamma_mem": "3.42e-4 N s/cm2",
+    "torque": "T0 = 151 N cm, gamma_R = 28.5 N cm s",
+    "rotation and friction": "about the centre, viscous",
 }
 #: The bot's MSD inside the membrane is compared with the free bot's at this lag (s).
 SHORT_LAG = 0.1
