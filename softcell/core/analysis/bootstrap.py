@@ -85,7 +85,8 @@ def sweep_estimates(
     -------
     dict of Estimate
         ``mean_go_duration``, ``mean_stop_duration`` (s), ``v0_hat``, ``ballistic_velocity``
-        (cm/s), ``msd_slope`` (cm^2/s): values as the analysis stored them, errors from
+        (cm/s), ``msd_slope`` (cm^2/s): values as the analysis stored them;
+        ``go_duration_second_moment`` <tau_g^2> (s^2) of the pooled go phases; errors from
         ``resamples`` resamples of the realizations of each radius (seeded by ``seed``).
         ``msd`` ([radius, resample, lag] cm^2 resampled MSD curves) is under the key
         ``"msd_samples"`` as a bare array for the collapse.
@@ -98,7 +99,7 @@ def sweep_estimates(
     radii = np.atleast_1d(np.asarray(analysis["radius"].values, dtype=float))
     sel = analysis.sel(body=body)
     names = ("mean_go_duration", "mean_stop_duration", "v0_hat", "ballistic_velocity")
-    names += ("msd_slope",)
+    names += ("msd_slope", "go_duration_second_moment")
     samples = {n: np.full((resamples, radii.size), np.nan) for n in names}
     curves = np.full((radii.size, resamples, lag.size), np.nan)
     for i in range(radii.size):
@@ -107,10 +108,10 @@ def sweep_estimates(
         speed = np.asarray(point["speed"].values, dtype=np.float64)
         each = np.asarray(point["msd_realization"].values, dtype=np.float64)
         n_real = labels.shape[0]
-        sums = np.zeros((n_real, 4))  # go sum, go count, stop sum, stop count
+        sums = np.zeros((n_real, 5))  # go sum, go count, stop sum, stop count, go^2 sum
         for k in range(n_real):
             d = stopgo.durations(labels[k], time, only)
-            sums[k] = d.go.sum(), d.go.size, d.stop.sum(), d.stop.size
+            sums[k] = d.go.sum(), d.go.size, d.stop.sum(), d.stop.size, (d.go**2).sum()
         fine = speed[:, plan.fine.first : plan.fine.last]
         squares = np.nansum(fine**2, axis=1), np.isfinite(fine).sum(axis=1)
         idx = _rng(seed, i).integers(0, n_real, (resamples, n_real))
@@ -119,6 +120,7 @@ def sweep_estimates(
             tau_g = picked[:, 0] / picked[:, 1]
             samples["mean_go_duration"][:, i] = tau_g
             samples["mean_stop_duration"][:, i] = picked[:, 2] / picked[:, 3]
+            samples["go_duration_second_moment"][:, i] = picked[:, 4] / picked[:, 1]
             samples["v0_hat"][:, i] = np.sqrt(squares[0][idx].sum(1) / squares[1][idx].sum(1))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # lags no resample reaches
@@ -134,7 +136,13 @@ def sweep_estimates(
             )[0]
     out: dict[str, Any] = {}
     for n in names:
-        value = np.atleast_1d(np.asarray(sel[n].values, dtype=float))
+        if n == "go_duration_second_moment":
+            go = np.asarray(sel["go_duration"].values, dtype=float).reshape(radii.size, -1)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # a radius with no go phase
+                value = np.nanmean(go**2, axis=-1)
+        else:
+            value = np.atleast_1d(np.asarray(sel[n].values, dtype=float))
         out[n] = Estimate(value, _error(samples[n]), samples[n])
     out["msd_samples"] = curves
     return out

@@ -112,6 +112,15 @@ def run_and_tumble_msd(lag: np.ndarray, v0_hat: float, mean_go: float) -> np.nda
     return 2 * v0_hat**2 * (lag * mean_go - mean_go**2 * -np.expm1(-lag / mean_go))
 
 
+def renewal_msd_slope(v0_hat: float, mean_go: float, go_second_moment: float) -> float:
+    """D hat (cm^2/s) of alternating go and stop phases of any duration distributions, the
+    go phases at one speed, each in a new uniformly random direction (a renewal process):
+    v^2 <tau_g^2> / (<tau_g> + <tau_s>) = v0_hat^2 <tau_g^2> / <tau_g>, since v0_hat^2 = v^2
+    <tau_g> / (<tau_g> + <tau_s>). Exponential go phases (<tau_g^2> = 2 <tau_g>^2) give the
+    paper's 2 v0_hat^2 <tau_g>. ``mean_go`` in s, ``go_second_moment`` in s^2."""
+    return v0_hat**2 * go_second_moment / mean_go
+
+
 def v0_hat(speed: np.ndarray) -> float:
     """sqrt(mean^2 + variance) of the full speed distribution (stops included), i.e. the root
     mean square speed (cm/s); NaN samples are ignored."""
