@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
@@ -287,6 +288,8 @@ def test_the_checksum_is_no_attribute_of_the_data(one_run, tmp_path):
 
 
 PY = [sys.executable, "-m", "softcell"]
+#: Two points of a short coarse run: what a test of the command line needs to be cheap.
+SMALL_RUN = ["--radius", "4,8", "--duration", "0.5", "--quiet"]
 
 
 def _start(argv: list[str]) -> subprocess.Popen:
@@ -580,3 +583,25 @@ def test_read_dataset_of_a_directory_says_so(tmp_path):
 
     with pytest.raises(SoftcellError, match="is a directory, not a NetCDF file"):
         read_dataset(tmp_path)
+
+
+def test_a_second_local_cluster_on_the_machine_says_nothing(tmp_path):
+    # dask's scheduler listens on 8787 even with no dashboard; a second softcell cluster on
+    # the machine printed a four-line "Port 8787 is already in use" warning.
+    import socket
+
+    held = socket.socket()
+    with suppress(OSError):  # taken already: the situation this test sets up
+        held.bind(("127.0.0.1", 8787))
+        held.listen()
+    try:
+        run = subprocess.run(
+            [*PY, "simulate", *SMALL_RUN, "--workers", "2", "-o", str(tmp_path / "out")],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+    finally:
+        held.close()
+    assert run.returncode == 0, run.stderr
+    assert "already in use" not in run.stderr and run.stderr.strip() == "", run.stderr

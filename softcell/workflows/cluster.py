@@ -51,6 +51,9 @@ def cluster_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
+            # The scheduler's HTTP server still listens (8787 by default, with a warning
+            # for every second cluster on the machine): on a free loopback port instead.
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             silence_logs=logging.ERROR,
         )
     with cluster, Client(cluster) as client:
