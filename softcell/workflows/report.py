@@ -136,6 +136,14 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
     ]
 
 
+def _tracked(out: Path, video: dict[str, Any] | None):
+    """The analysis of the tracked film, when the reproduction made one."""
+    from softcell.io.netcdf import read_dataset
+
+    path = out / "video" / "tracked_analysis.nc"
+    return read_dataset(path) if video is not None and path.exists() else None
+
+
 def _findings_blocks(rows) -> list[Block]:
     """The findings table, then the rule of each verdict."""
     return [
@@ -188,7 +196,7 @@ def write_report(
     components = json.loads(analysis.attrs.get("softcell_components", "{}"))
     options = json.loads(analysis.attrs["softcell_analysis_options"])
     command = f"softcell reproduce --{design.name} -o {out} --seed {seed}"
-    rows = findings(analysis, free_bot)
+    rows = findings(analysis, free_bot, seed, _tracked(out, video))
 
     blocks = [
         Block("h1", 'softcell: reproduction of "Run and tumble dynamics of a soft robotic cell"'),
