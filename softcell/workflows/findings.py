@@ -532,10 +532,10 @@ def _theory_findings(sweep: _Sweep) -> list[Finding]:
 
 
 def _error_of(samples: np.ndarray) -> np.ndarray:
-    from softcell.core.analysis.bootstrap import _error
+    from softcell.core.analysis.bootstrap import standard_error
 
     with np.errstate(invalid="ignore", divide="ignore"):
-        return _error(samples)
+        return standard_error(samples)
 
 
 # -- durations ----------------------------------------------------------------------------------

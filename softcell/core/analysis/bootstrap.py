@@ -68,7 +68,9 @@ def _rng(seed: int, *key: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(STREAM, *key)))
 
 
-def _error(samples: np.ndarray) -> np.ndarray:
+def standard_error(samples: np.ndarray) -> np.ndarray:
+    """The standard deviation over resamples (axis 0) where at least 2 are finite, else NaN:
+    the bootstrap standard error, in the samples' unit."""
     finite = np.isfinite(samples).sum(axis=0)
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # radii with < 2 finite resamples
@@ -143,7 +145,7 @@ def sweep_estimates(
                 value = np.nanmean(go**2, axis=-1)
         else:
             value = np.atleast_1d(np.asarray(sel[n].values, dtype=float))
-        out[n] = Estimate(value, _error(samples[n]), samples[n])
+        out[n] = Estimate(value, standard_error(samples[n]), samples[n])
     out["msd_samples"] = curves
     return out
 
