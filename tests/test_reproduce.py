@@ -22,7 +22,7 @@ TINY = Design(
     free_bot_realizations=2,
     video=VideoDesign(radius=12.0, span=5.0),
 )
-FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
+FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3", "figT")
 
 
 @pytest.fixture(scope="module")
@@ -131,6 +131,7 @@ def test_figures_command_draws_what_its_inputs_allow(results, tmp_path, capsys):
         "fig4.png",
         "figS2.png",
         "figS3.png",
+        "figT.png",
     ]
     free = softcell.read_dataset(out / "free_bot_analysis.nc")
     assert main(["figures", str(out / "free_bot_analysis.nc"), "-o", str(tmp_path)]) == 2

@@ -71,6 +71,7 @@ def test_the_variants_move_one_unknown_each():
     assert sorted(set(unknowns)) == [
         "bot",
         "cutoff",
+        "force",
         "friction",
         "gamma_mem",
         "k",
@@ -78,6 +79,7 @@ def test_the_variants_move_one_unknown_each():
         "rotation",
         "rotation and friction",
         "torque",
+        "torque and k",
     ]
     owns = {
         "bot": {"bot_semi_major", "bot_semi_minor"},
@@ -88,6 +90,8 @@ def test_the_variants_move_one_unknown_each():
         "friction": {"friction_law", "membrane_static_friction", "static_friction_width"},
         "gamma_mem": {"membrane_friction"},
         "torque": {"drive_torque", "bot_rotational_friction"},
+        "torque and k": {"drive_torque", "bot_rotational_friction", "bending_stiffness"},
+        "force": {"drive_force", "bot_friction"},
         "rotation and friction": {
             "driving_protocol",
             "friction_law",

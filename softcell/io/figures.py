@@ -423,6 +423,60 @@ def figure_s3(analysis: xr.Dataset, radius: float = 12.0):
     return fig
 
 
+def figure_theory(analysis: xr.Dataset):
+    """Beyond the paper: (a) the cell's velocity autocorrelation C(tau) / C(0), measured and
+    the renewal theory's, at three radii; (b) the cell MSD over the two theories' MSDs
+    (exponential phases dashed, the measured go durations solid), every R; (c) the mean
+    cosine between consecutive go displacements against R (0 in both theories)."""
+    fig = _figure(12, 3.8)
+    ax_a, ax_b, ax_c = fig.subplots(1, 3)
+    radii = analysis["radius"].values
+    colors = dict(zip(radii, _radius_colors(radii), strict=True))
+    cell = analysis.sel(body="cell")
+    tau = analysis["correlation_lag"].values
+    _label(ax_a, "a")
+    shown = [r for r in (4.0, 8.0, 12.0) if r in radii] or list(radii[:: max(len(radii) // 3, 1)])
+    for r in shown:
+        c = cell["velocity_autocorrelation"].sel(radius=r).values
+        each = cell["velocity_autocorrelation_realization"].sel(radius=r).values
+        n = np.isfinite(each).sum(axis=0)
+        err = np.nanstd(each, axis=0, ddof=1) / np.sqrt(np.maximum(n, 1)) / c[0]
+        ax_a.plot(tau, c / c[0], color=colors[r], lw=1.2, label=f"R = {r:g} cm")
+        ax_a.fill_between(tau, c / c[0] - err, c / c[0] + err, color=colors[r], alpha=0.3, lw=0)
+        theory = cell["velocity_autocorrelation_renewal"].sel(radius=r).values
+        ax_a.plot(tau, theory / theory[0], color=colors[r], lw=1, ls=":")
+    ax_a.axhline(0, color="0.5", lw=0.5)
+    ax_a.set_xlim(0, min(6.0, float(tau[-1])))
+    ax_a.set_xlabel(r"$\tau$ (s)")
+    ax_a.set_ylabel(r"$C(\tau)/C(0)$ (cell)")
+    ax_a.legend(fontsize=6, title="solid: measured; dotted: renewal theory", title_fontsize=6)
+    _label(ax_b, "b")
+    lag = analysis["lag"].values
+    for r in radii:
+        m, c = cell["msd"].sel(radius=r).values, colors[r]
+        renewal = cell["msd_theory_renewal"].sel(radius=r).values
+        ax_b.plot(lag, m / renewal, color=c, lw=1, label=f"{r:g}")
+        ax_b.plot(lag, m / cell["msd_theory"].sel(radius=r).values, color=c, lw=0.7, ls="--")
+    ax_b.axhline(1, color="k", lw=0.6)
+    ax_b.set_xscale("log")
+    ax_b.set_yscale("log")
+    ax_b.set_xlabel(r"$\tau$ (s)")
+    ax_b.set_ylabel("cell MSD / theory")
+    ax_b.set_title("solid: renewal; dashed: exponential phases", fontsize=7)
+    ax_b.legend(fontsize=5, ncol=2, title="R (cm)", title_fontsize=6)
+    _label(ax_c, "c")
+    _shade_regimes(ax_c, analysis)
+    turns = cell["go_turn_cosine_realization"].values
+    pairs = cell["go_turn_pairs"].values
+    n = (pairs > 0).sum(axis=-1)
+    err = np.nanstd(turns, axis=-1, ddof=1) / np.sqrt(np.maximum(n, 1))
+    ax_c.errorbar(radii, cell["go_turn_cosine"].values, yerr=err, fmt="o", color=SIM_COLOR, ms=4)
+    ax_c.axhline(0, color="k", lw=0.6)
+    ax_c.set_xlabel("R (cm)")
+    ax_c.set_ylabel("mean cos(turn) between go phases")
+    return fig
+
+
 def _metadata(fmt: str, name: str) -> dict[str, str]:
     from softcell._version import __version__
 
@@ -435,7 +489,17 @@ def _metadata(fmt: str, name: str) -> dict[str, str]:
 
 
 #: Figures :func:`make_figures` may write, each in every format of :data:`FORMATS`.
-FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3")
+FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3", "figT")
+
+#: What the figure of the velocity correlations (beyond the paper) reads; an analysis made
+#: before softcell 0.3 lacks it, and the figure is left out.
+THEORY_NEEDS = (
+    "velocity_autocorrelation",
+    "velocity_autocorrelation_realization",
+    "velocity_autocorrelation_renewal",
+    "msd_theory_renewal",
+    "go_turn_cosine",
+)
 
 #: Variables each input of :func:`make_figures` must hold.
 NEEDS = {
@@ -552,6 +616,11 @@ def make_figures(
         ),
         "figS2": (lambda: figure_s2(analysis), False, ""),
         "figS3": (lambda: figure_s3(analysis), False, ""),
+        "figT": (
+            lambda: figure_theory(analysis),
+            any(v not in analysis.variables for v in THEORY_NEEDS),
+            "needs the velocity autocorrelation (an analysis by softcell >= 0.3)",
+        ),
     }
     with atomic_files() as staging:  # the whole set, or nothing (a full disk)
         for name, (draw, missing, why) in plans.items():

@@ -18,18 +18,29 @@ from softcell.core.schema import simulation_dataset
 
 
 def stop_and_go_path(
-    rng: np.random.Generator, times: np.ndarray, speed: float, mean_go: float, mean_stop: float
+    rng: np.random.Generator,
+    times: np.ndarray,
+    speed: float,
+    mean_go: float,
+    mean_stop: float,
+    turn: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Positions x, y (cm) at ``times`` (s) of one stationary stop-and-go path from the
     origin: the first phase is go with probability p, every duration is exponential (so the
-    path is stationary from t = 0)."""
+    path is stationary from t = 0). Each go phase heads in a new uniformly random direction,
+    or, with ``turn`` (rad), turns by +-``turn`` (either sign with probability 1/2) from the
+    previous go phase's direction (mean cosine between consecutive go phases: cos(turn))."""
     horizon = float(times[-1] - times[0])
     p = mean_go / (mean_go + mean_stop)
     go = rng.random() < p
     t, x, y = [float(times[0])], [0.0], [0.0]
+    angle = rng.uniform(0, 2 * np.pi)
     while t[-1] < times[0] + horizon:
         duration = rng.exponential(mean_go if go else mean_stop)
-        angle = rng.uniform(0, 2 * np.pi)
+        if go:
+            angle = (
+                rng.uniform(0, 2 * np.pi) if turn is None else angle + turn * rng.choice((-1, 1))
+            )
         step = speed * duration if go else 0.0
         t.append(t[-1] + duration)
         x.append(x[-1] + step * np.cos(angle))
@@ -50,16 +61,19 @@ def stop_and_go_dataset(
     bot_offset: float = 6.0,
     nodes: int = 16,
     offset: Sequence[float] = (0.0, 0.0),
+    turn: float | None = None,
 ) -> xr.Dataset:
     """A simulation-schema Dataset whose cell follows :func:`stop_and_go_path`.
 
     The membrane is a circle of ``radius`` (cm) around the cell (``nodes`` points); the bot
     sits ``bot_offset`` (cm) from the cell, in a direction that turns at 1 rad/s, so its
     distance to the cell is exactly ``bot_offset``. ``offset`` (cm) is added to every
-    position.
+    position; ``turn`` is :func:`stop_and_go_path`'s.
     """
     times = np.asarray(times, dtype=np.float64)
-    paths = [stop_and_go_path(rng, times, speed, mean_go, mean_stop) for _ in range(realizations)]
+    paths = [
+        stop_and_go_path(rng, times, speed, mean_go, mean_stop, turn) for _ in range(realizations)
+    ]
     cx = np.array([p[0] for p in paths]) + offset[0]
     cy = np.array([p[1] for p in paths]) + offset[1]
     angle = np.linspace(0, 2 * np.pi, nodes, endpoint=False)

@@ -83,11 +83,12 @@ class _Sweep:
         free_bot: xr.Dataset | None,
         seed: int,
         tracked: xr.Dataset | None = None,
+        contact: xr.Dataset | None = None,
     ) -> None:
         from softcell.core.analysis.bootstrap import sweep_estimates
 
         self.analysis, self.free_bot, self.seed = analysis, free_bot, seed
-        self.tracked = tracked
+        self.tracked, self.contact = tracked, contact
         self.radii = np.asarray(analysis["radius"].values, dtype=float)
         self.regime = np.asarray(analysis["regime"].values, dtype=int)
         self.ratio = np.asarray(analysis["gc_distance_ratio"].values, dtype=float)
@@ -289,9 +290,8 @@ def _go_duration_finding(sweep: _Sweep) -> Finding:
     else:
         verdict = "differs"
         cause = (
-            f"<tau_g> is longest at R = {radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}); "
-            "unexplained: the paper's mechanism (the membrane constricting the bot's "
-            "orientation) is not measured here"
+            f"<tau_g> is longest at R = {radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}). "
+            + _steering(sweep)
         )
     return Finding(
         "<tau_g> against R",
@@ -305,6 +305,29 @@ def _go_duration_finding(sweep: _Sweep) -> Finding:
         errors,
         {"radius": "cm", "mean_go_duration": "s"},
         cause,
+    )
+
+
+def _steering(sweep: _Sweep) -> str:
+    """The paper's mechanism for long go phases (the membrane steering the bot), measured:
+    the membrane's torque on the bot against the drive's."""
+    c = sweep.contact
+    if c is None:
+        return (
+            "Unexplained: the paper's mechanism (the membrane constricting the bot's "
+            "orientation) is not measured here (no contact.nc)"
+        )
+    most = float(np.nanmax(c["contact_torque_max"].values))
+    rms = float(np.nanmax(c["contact_torque_rms"].values))
+    t0 = float(c["drive_torque"].values[0])
+    gamma = float(c["bot_rotational_friction"].values[0])
+    return (
+        "The paper's mechanism (the membrane constricting the bot's orientation) is off in "
+        f"the model: the membrane's torque on the bot is at most {most:.2g} N cm at any R "
+        f"(RMS up to {rms:.2g}), {most / t0:.1e} of the drive's T0 = {t0:g} N cm; in a run "
+        f"it turns the heading at most {most / gamma:.1e} rad/s (a tumble: T0 / gamma_R = "
+        f"{t0 / gamma:.2g} rad/s). Measured on {c.attrs.get('realizations', '?')} "
+        "realizations per radius (contact.nc)"
     )
 
 
@@ -491,9 +514,9 @@ def _theory_findings(sweep: _Sweep) -> list[Finding]:
             + ", ".join(f"{r:g}: {v:.2f}" for r, v in zip(radii, renewal_ratio, strict=True))
             + ": the duration distribution "
             + (
-                f"does not remove it (fit / renewal > 1 by {NOISE:g} SE at every R >= 10 cm), "
-                "which leaves direction kept across phases (the paper's velocity "
-                "correlations) as the candidate, not measured"
+                f"does not remove it (fit / renewal > 1 by {NOISE:g} SE at every R >= 10 cm): "
+                "what remains is velocity correlated across go phases, which both theories "
+                "leave out (measured: the next finding)"
                 if still
                 else "removes it within errors at R >= 10 cm"
             )
@@ -529,6 +552,88 @@ def _theory_findings(sweep: _Sweep) -> list[Finding]:
         )
     )
     return rows
+
+
+def _correlation_findings(sweep: _Sweep) -> list[Finding]:
+    """The paper's explanation of the D hat offset (velocity correlations the theory
+    underestimates), measured: the velocity autocorrelation beyond the longest go phase."""
+    est, radii = sweep.estimates, sweep.radii
+    if "correlation_tail" not in est:
+        return []
+    tail, gk, turn = est["correlation_tail"], est["green_kubo_slope"], est["go_turn_cosine"]
+    fit = est["msd_slope"]
+    q = gk.value / fit.value
+    q_err = _error_of(gk.samples / fit.samples)
+    big = radii >= 10
+    tail_ok = bool(big.any() and np.all(tail.value[big] - NOISE * tail.error[big] > 0))
+    sums_ok = bool(big.any() and np.all(np.abs(q[big] - 1) <= NOISE * q_err[big]))
+    lag = float(sweep.analysis["correlation_lag"].values[-1])
+    affine = _affine_over_fit(sweep)
+    if tail_ok and sums_ok:
+        verdict, cause = "agrees", ""
+    elif tail_ok:
+        verdict = "partly"
+        cause = (
+            "the tail is there, but the autocorrelation's sum up to "
+            f"{lag:g} s differs from the fitted D hat by more than {NOISE:g} SE at some "
+            "R >= 10 cm. The fit of MSD = D hat tau from 10 <tau_g> on is biased low by the "
+            "MSD's offset at long lags (MSD ~ D hat (tau - tau_c)): an affine fit of the "
+            "same lags over the slope fit gives "
+            + ", ".join(f"{r:g}: {v:.2f}" for r, v in zip(radii, affine, strict=True))
+        )
+    else:
+        verdict, cause = "differs", "unexplained"
+    return [
+        Finding(
+            "theory: velocity correlations across go phases (the D hat offset)",
+            "the theory underestimates velocity correlations, hence its D hat below the fits "
+            "at large R",
+            "fraction of D hat from lags beyond the longest go phase (0 in both theories): "
+            + ", ".join(
+                f"{r:g}: {_pm(v, e, '.2f')}"
+                for r, v, e in zip(radii, tail.value, tail.error, strict=True)
+            )
+            + "; mean cosine between consecutive go displacements (0 in both theories): "
+            + ", ".join(
+                f"{r:g}: {_pm(v, e, '.2f')}"
+                for r, v, e in zip(radii, turn.value, turn.error, strict=True)
+            ),
+            verdict,
+            f"agrees: at every R >= 10 cm the fraction of D hat (the velocity "
+            f"autocorrelation's sum over lags up to {lag:g} s, Green-Kubo) from lags where "
+            f"the renewal theory's autocorrelation is 0 exceeds 0 by {NOISE:g} SE, and that "
+            f"sum matches the fitted D hat within {NOISE:g} SE; partly: the first only",
+            values={
+                "radius": _numbers(radii),
+                "tail_fraction": _numbers(tail.value),
+                "turn_cosine": _numbers(turn.value),
+                "green_kubo_over_fit": _numbers(q),
+                "affine_over_fit": _numbers(affine),
+            },
+            uncertainties={
+                "radius": None,
+                "tail_fraction": _numbers(tail.error),
+                "turn_cosine": _numbers(turn.error),
+                "green_kubo_over_fit": _numbers(q_err),
+                "affine_over_fit": None,
+            },
+            unit="1",
+            cause=cause,
+        )
+    ]
+
+
+def _affine_over_fit(sweep: _Sweep) -> np.ndarray:
+    """The affine fit's D hat over the slope fit's, per radius, over the fit's own lags."""
+    from softcell.core.analysis.fits import affine_slope
+
+    a = sweep.analysis
+    lag = np.asarray(a["lag"].values, dtype=float)
+    msd, fit = cell_values(a, "msd"), cell_values(a, "msd_slope")
+    start = cell_values(a, "diffusive_window_start")
+    return np.array(
+        [affine_slope(lag, m, lo) / f for m, lo, f in zip(msd, start, fit, strict=True)]
+    )
 
 
 def _error_of(samples: np.ndarray) -> np.ndarray:
@@ -573,20 +678,28 @@ def exponential_test(durations: np.ndarray, interval: float, seed: int) -> tuple
     return observed, float((1 + np.sum(null >= observed)) / (1 + np.isfinite(null).sum()))
 
 
+def _exponential_tests(
+    sweep: _Sweep, interval: float
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """:func:`exponential_test` of the cell's go and stop durations per radius: the KS
+    distances and the p-values, by kind."""
+    ks, p = {}, {}
+    for kind in ("go", "stop"):
+        data = np.asarray(sweep.analysis[f"{kind}_duration"].sel(body="cell").values, float)
+        tests = [exponential_test(row, interval, sweep.seed) for row in data]
+        ks[kind] = np.array([t[0] for t in tests])
+        p[kind] = np.array([t[1] for t in tests])
+    return ks, p
+
+
 def _duration_findings(sweep: _Sweep) -> list[Finding]:
     """The stop and go durations' distributions."""
     analysis, radii = sweep.analysis, sweep.radii
-    time = np.asarray(analysis["time"].values, dtype=float)
-    interval = float(np.min(np.diff(time)))
-    stats_ = {"go": [], "stop": []}
-    for kind in stats_:
-        data = np.asarray(analysis[f"{kind}_duration"].sel(body="cell").values, dtype=float)
-        for i in range(radii.size):
-            stats_[kind].append(exponential_test(data[i], interval, sweep.seed))
-    ks = {k: np.array([s[0] for s in v]) for k, v in stats_.items()}
-    p = {k: np.array([s[1] for s in v]) for k, v in stats_.items()}
+    interval = float(np.min(np.diff(np.asarray(analysis["time"].values, dtype=float))))
+    ks, p = _exponential_tests(sweep, interval)
     go_off = bool(np.all(p["go"][np.isfinite(p["go"])] < 0.05)) and np.isfinite(p["go"]).any()
     stop_exp = bool(np.all(p["stop"][np.isfinite(p["stop"])] >= 0.05))
+    shape, shape_values = _drive_shape(sweep, interval)
     if not np.isfinite(p["go"]).any():
         verdict, cause = "not measured", "fewer than 10 go phases per radius"
     elif go_off and stop_exp:
@@ -595,8 +708,7 @@ def _duration_findings(sweep: _Sweep) -> list[Finding]:
         verdict = "partly"
         cause = (
             "the stop durations are not exponential either (median KS distance "
-            f"{np.nanmedian(ks['stop']):.2f}); unexplained (the drive's uniform run and "
-            "tumble durations are a suspect, not shown)"
+            f"{np.nanmedian(ks['stop']):.2f}). " + shape
         )
     else:
         verdict, cause = "differs", "the go durations are exponential; unexplained"
@@ -608,7 +720,7 @@ def _duration_findings(sweep: _Sweep) -> list[Finding]:
             f"KS distance of t / <t> from exp(-t'), median over R: go "
             f"{np.nanmedian(ks['go']):.2f} (largest p = {np.nanmax(p['go']):.2g}), stop "
             f"{np.nanmedian(ks['stop']):.2f} (largest p = {np.nanmax(p['stop']):.2g}); the "
-            "experiments' claim is not tested here (Fig. S2)",
+            "experiments' claim is tested on the tracked film (next finding; Fig. S2)",
             verdict,
             "agrees: at every R the go durations reject an exponential (p < 0.05) and the "
             "stop durations do not; p from a Monte Carlo null of exponential durations with "
@@ -620,12 +732,58 @@ def _duration_findings(sweep: _Sweep) -> list[Finding]:
                 "go_p": _numbers(p["go"]),
                 "stop_ks": _numbers(ks["stop"]),
                 "stop_p": _numbers(p["stop"]),
+                **shape_values,
             },
-            uncertainties={k: None for k in ("radius", "go_ks", "go_p", "stop_ks", "stop_p")},
-            unit={"radius": "cm", "go_ks": "1", "go_p": "1", "stop_ks": "1", "stop_p": "1"},
+            uncertainties={
+                k: None for k in ("radius", "go_ks", "go_p", "stop_ks", "stop_p", *shape_values)
+            },
+            unit={
+                "radius": "cm",
+                **{k: "1" for k in ("go_ks", "go_p", "stop_ks", "stop_p")},
+                **{k: ("s" if k.endswith("longest") else "1") for k in shape_values},
+            },
             cause=cause,
         )
     ]
+
+
+def _drive_shape(sweep: _Sweep, interval: float) -> tuple[str, dict[str, list]]:
+    """Where the drive's phase durations show through the cell's: per radius, the fractions
+    of go and stop phases shorter than the drive's shortest phase, within its range (up to
+    two samples beyond its longest), longer, and the longest; with a sentence."""
+    params = json.loads(sweep.analysis.attrs.get("softcell_parameters", "{}"))
+    lo, hi = params.get("phase_min"), params.get("phase_max")
+    if not isinstance(lo, (int, float)) or not isinstance(hi, (int, float)):
+        return "The drive's phase durations are not recorded: the shape is unexplained.", {}
+    top = hi + 2 * interval
+    out: dict[str, list] = {}
+    for kind in ("go", "stop"):
+        data = np.asarray(sweep.analysis[f"{kind}_duration"].sel(body="cell").values, float)
+        rows = [d[np.isfinite(d)] for d in data]
+        with np.errstate(invalid="ignore"):
+            out[f"{kind}_short"] = _numbers(np.array([np.mean(d < lo - 1e-9) for d in rows]))
+            out[f"{kind}_in_drive_range"] = _numbers(
+                np.array([np.mean((d >= lo - 1e-9) & (d <= top + 1e-9)) for d in rows])
+            )
+            out[f"{kind}_long"] = _numbers(np.array([np.mean(d > top + 1e-9) for d in rows]))
+        out[f"{kind}_longest"] = _numbers(np.array([d.max() if d.size else np.nan for d in rows]))
+
+    def span(key: str) -> str:
+        v = np.array([np.nan if x is None else x for x in out[key]])
+        return f"{np.nanmin(v):.2f}-{np.nanmax(v):.2f}"
+
+    sentence = (
+        f"The shape is the drive's: its runs and tumbles last U[{lo:g}, {hi:g}] s. Of the "
+        f"cell's go phases, {span('go_in_drive_range')} (over R) last {lo:g} to {top:g} s "
+        f"(whole runs: a flat density, the plateau of Fig. S2), {span('go_short')} are "
+        f"shorter (the cell's speed crossing the threshold within a run) and only "
+        f"{span('go_long')} longer, the longest {span('go_longest')} s (the drive's "
+        f"{hi:g} s plus the membrane's lag: the cutoff); the stop phases: "
+        f"{span('stop_in_drive_range')} within, {span('stop_short')} shorter and "
+        f"{span('stop_long')} longer than any tumble (up to {span('stop_longest')} s: they "
+        "span whole runs in which the cell did not move)"
+    )
+    return sentence, out
 
 
 def _tracked_duration_findings(sweep: _Sweep) -> list[Finding]:
@@ -785,6 +943,7 @@ FINDINGS = (
     _trend_findings,
     _collapse_findings,
     _theory_findings,
+    _correlation_findings,
     _duration_findings,
     _tracked_duration_findings,
     _bot_msd_findings,
@@ -797,13 +956,15 @@ def findings(
     free_bot: xr.Dataset | None = None,
     seed: int | None = None,
     tracked: xr.Dataset | None = None,
+    contact: xr.Dataset | None = None,
 ) -> list[Finding]:
     """The paper's findings beside the measured values of a radius sweep's analysis (and of
-    the free bot's, and of a tracked film of the simulation, when given).
+    the free bot's, of a tracked film of the simulation, and of the membrane's reaction on
+    the bot (:func:`softcell.workflows.contact.contact_summary`), when given).
 
     ``seed`` seeds the bootstraps (default: the analysis' own ``softcell_seed``), so the
     errors are the same bytes on every rerun.
     """
     seed = int(analysis.attrs.get("softcell_seed", 0) if seed is None else seed)
-    sweep = _Sweep(analysis, free_bot, seed, tracked)
+    sweep = _Sweep(analysis, free_bot, seed, tracked, contact)
     return [row for finding in FINDINGS for row in finding(sweep)]

@@ -43,6 +43,11 @@ CAPTIONS = {
     "figS1": "Fig. S1 (b). MSD of the free bot and of the bot inside membranes of every R.",
     "figS2": "Fig. S2. Simulated PDFs of go (a) and stop (b) durations over their mean.",
     "figS3": "Fig. S3 (b). MSD of the bot and the cell at R = 12 cm, with standard errors.",
+    "figT": "Beyond the paper. (a) The cell's velocity autocorrelation C(tau) / C(0) at three "
+    "radii, measured (solid, standard error shaded) and the renewal theory's for the measured "
+    "go durations (dotted: zero beyond the longest go phase); (b) the cell MSD over the renewal "
+    "theory's (solid) and over the exponential theory's (dashed), every R; (c) the mean cosine "
+    "between consecutive go displacements (0 in both theories).",
 }
 
 
@@ -196,7 +201,9 @@ def write_report(
     components = json.loads(analysis.attrs.get("softcell_components", "{}"))
     options = json.loads(analysis.attrs["softcell_analysis_options"])
     command = f"softcell reproduce --{design.name} -o {out} --seed {seed}"
-    rows = findings(analysis, free_bot, seed, _tracked(out, video))
+    contact_path = out / "contact.nc"
+    contact = read_dataset(contact_path) if contact_path.exists() else None
+    rows = findings(analysis, free_bot, seed, _tracked(out, video), contact)
 
     blocks = [
         Block("h1", 'softcell: reproduction of "Run and tumble dynamics of a soft robotic cell"'),

@@ -7,8 +7,9 @@ directory::
     free_bot/               the bot without a membrane (S1)
     analysis.nc             the sweep's analysis                    softcell analyze
     free_bot_analysis.nc
+    contact.nc              the membrane's force and torque on the bot, per radius
     video/                  one realization rendered, tracked and analysed as an experiment
-    figures/                Fig. 2, 3, 4, S1, S2, S3 as PNG and PDF
+    figures/                Fig. 2, 3, 4, S1, S2, S3 and T (theory) as PNG and PDF
     report.md, report.html  what ran, every figure, the paper's findings beside ours
     findings.json           the findings table, for scripts
     reproduce.json          the design, seed and version the directory was made for
@@ -292,6 +293,7 @@ def reproduce(
     from softcell.io.files import atomic_write, check_output, check_writable
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.workflows.cluster import check_scheduler, cluster_client
+    from softcell.workflows.contact import contact_summary
     from softcell.workflows.ensemble import simulate
     from softcell.workflows.report import write_report
 
@@ -368,6 +370,11 @@ def reproduce(
         write_dataset(analysis, out / "analysis.nc")
         free_analysis = analyze(open_dataset(out / "free_bot"), options, registry=registry)
         write_dataset(free_analysis, out / "free_bot_analysis.nc")
+        # The membrane's reaction on the bot (the paper's steering mechanism), per radius.
+        write_dataset(
+            contact_summary(out / "simulations", discard=design.discard, registry=registry),
+            out / "contact.nc",
+        )
     video = tracked = None
     if design.video is not None:
         with step(

@@ -91,6 +91,26 @@ VARIANTS: tuple[Variant, ...] = (
         parameters={"drive_torque": 0.1511, "bot_rotational_friction": 0.0285},
         unknown="torque",
     ),
+    # ... and jointly with a membrane 10 times softer, which deforms more and so could
+    # steer the bot more.
+    Variant(
+        "torque_1e-3_k_0.057",
+        "T0 and gamma_R / 1000, k = 0.057 N cm2",
+        parameters={
+            "drive_torque": 0.1511,
+            "bot_rotational_friction": 0.0285,
+            "bending_stiffness": 0.057,
+        },
+        unknown="torque and k",
+    ),
+    # F0 and gamma_T halved together keep the free bot's 15 cm/s (a stated fact) and double
+    # the membrane's friction relative to the bot's.
+    Variant(
+        "force_x0.5",
+        "F0 and gamma_T / 2",
+        parameters={"drive_force": 0.021375, "bot_friction": 0.001425},
+        unknown="force",
+    ),
     # The experiments' conditions: a tumble turns the bot about a pivot, on a floor with
     # static friction.
     Variant(
@@ -112,6 +132,8 @@ DEFAULTS = {
     "gamma_mem": "3.42e-4 N s/cm2",
     "torque": "T0 = 151 N cm, gamma_R = 28.5 N cm s",
     "rotation and friction": "about the centre, viscous",
+    "torque and k": "T0 = 151 N cm, gamma_R = 28.5 N cm s, k = 0.57 N cm2",
+    "force": "F0 = 0.04275 N, gamma_T = 2.85e-3 N s/cm",
 }
 #: The bot's MSD inside the membrane is compared with the free bot's at this lag (s).
 SHORT_LAG = 0.1

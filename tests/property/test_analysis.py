@@ -158,6 +158,55 @@ def test_stop_and_go_fits_and_theory_recover_the_planted_process():
     assert float(out.crossover_time) == pytest.approx(2 * tg, rel=0.1)
 
 
+def test_turns_between_go_phases_are_measured_and_carry_the_msd_slope():
+    """Go phases turning by +-60 degrees (mean cosine c = 1/2 between consecutive ones, c^k
+    between phases k apart) double D hat: the displacements sum to
+    (<l^2> + 2 <l>^2 c / (1 - c)) / (<tau_g> + <tau_s>) = 2 v^2 <tau_g>^2 / ((1 - c) cycle)
+    for exponential go phases. The renewal theory (no turn memory) misses the factor; the
+    velocity autocorrelation's Green-Kubo sum recovers it. Uniform turns give c = 0 and an
+    autocorrelation that the renewal theory accounts for."""
+    v, tg, ts = 2.0, 1.0, 2.0
+    times = two_rate_times(0.01, 0.1, 100.0, 1000.0)
+    planted = 2 * v**2 * tg**2 / ((1 - 0.5) * (tg + ts))
+    options = {"max_lag_fraction": 0.25, "correlation_max_lag": 40.0}
+    kept = analyze(
+        stop_and_go_dataset(
+            np.random.default_rng(8),
+            times,
+            realizations=60,
+            speed=v,
+            mean_go=tg,
+            mean_stop=ts,
+            nodes=4,
+            turn=np.pi / 3,
+        ),
+        options,
+    ).sel(body="cell")
+    assert float(kept.go_turn_cosine) == pytest.approx(0.5, abs=0.03)
+    assert float(kept.green_kubo_slope) == pytest.approx(planted, rel=0.1)
+    renewal = fits.renewal_msd_slope(float(kept.v0_hat), tg, 2 * tg**2)
+    assert renewal == pytest.approx(planted / 2, rel=0.1)
+    fresh = analyze(
+        stop_and_go_dataset(
+            np.random.default_rng(9),
+            times,
+            realizations=60,
+            speed=v,
+            mean_go=tg,
+            mean_stop=ts,
+            nodes=4,
+        ),
+        options,
+    ).sel(body="cell")
+    assert abs(float(fresh.go_turn_cosine)) < 0.03
+    c = fresh.velocity_autocorrelation.values
+    theory = fresh.velocity_autocorrelation_renewal.values
+    np.testing.assert_allclose(c, theory, atol=0.05 * c[0])
+    assert float(fresh.green_kubo_slope) == pytest.approx(
+        2 * float(fresh.v0_hat) ** 2 * tg, rel=0.1
+    )
+
+
 def test_confined_square_formula_limits():
     side, d = 10.0, 1.3
     assert fits.confined_square_msd(np.array([1e6]), d, side)[0] == pytest.approx(side**2 / 3)

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from softcell.core.analysis import fits, stopgo
+from softcell.core.analysis import correlation, fits, stopgo
 from softcell.core.analysis.options import analysis_options
 from softcell.core.analysis.series import segments
 from softcell.core.analysis.sweep import COLLAPSE_VARIANTS, LagPlan, collapse_spread
@@ -88,7 +88,10 @@ def sweep_estimates(
     dict of Estimate
         ``mean_go_duration``, ``mean_stop_duration`` (s), ``v0_hat``, ``ballistic_velocity``
         (cm/s), ``msd_slope`` (cm^2/s): values as the analysis stored them;
-        ``go_duration_second_moment`` <tau_g^2> (s^2) of the pooled go phases; errors from
+        ``go_duration_second_moment`` <tau_g^2> (s^2) of the pooled go phases; if the analysis
+        has the velocity autocorrelation, ``green_kubo_slope`` (cm^2/s), ``correlation_tail``
+        (1: the fraction of it from lags where the renewal theory's autocorrelation is 0,
+        :func:`correlation_tail`) and ``go_turn_cosine`` (1); errors from
         ``resamples`` resamples of the realizations of each radius (seeded by ``seed``).
         ``msd`` ([radius, resample, lag] cm^2 resampled MSD curves) is under the key
         ``"msd_samples"`` as a bare array for the collapse.
@@ -102,10 +105,12 @@ def sweep_estimates(
     sel = analysis.sel(body=body)
     names = ("mean_go_duration", "mean_stop_duration", "v0_hat", "ballistic_velocity")
     names += ("msd_slope", "go_duration_second_moment")
+    if "velocity_autocorrelation_realization" in sel:
+        names += ("green_kubo_slope", "correlation_tail", "go_turn_cosine")
     samples = {n: np.full((resamples, radii.size), np.nan) for n in names}
     curves = np.full((radii.size, resamples, lag.size), np.nan)
     for i in range(radii.size):
-        point = sel.isel(radius=i) if "radius" in sel.dims else sel
+        point = _point(sel, i)
         labels = np.asarray(point["stopgo_label"].values)
         speed = np.asarray(point["speed"].values, dtype=np.float64)
         each = np.asarray(point["msd_realization"].values, dtype=np.float64)
@@ -124,6 +129,9 @@ def sweep_estimates(
             samples["mean_stop_duration"][:, i] = picked[:, 2] / picked[:, 3]
             samples["go_duration_second_moment"][:, i] = picked[:, 4] / picked[:, 1]
             samples["v0_hat"][:, i] = np.sqrt(squares[0][idx].sum(1) / squares[1][idx].sum(1))
+        if "green_kubo_slope" in names:
+            for n, v in _correlation_samples(point, idx).items():
+                samples[n][:, i] = v
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # lags no resample reaches
             curves[i] = np.nanmean(each[idx], axis=1)
@@ -143,11 +151,55 @@ def sweep_estimates(
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # a radius with no go phase
                 value = np.nanmean(go**2, axis=-1)
+        elif n == "correlation_tail":
+            value = np.array([correlation_tail(_point(sel, i)) for i in range(radii.size)])
         else:
             value = np.atleast_1d(np.asarray(sel[n].values, dtype=float))
         out[n] = Estimate(value, standard_error(samples[n]), samples[n])
     out["msd_samples"] = curves
     return out
+
+
+def _point(sel: xr.Dataset, i: int) -> xr.Dataset:
+    return sel.isel(radius=i) if "radius" in sel.dims else sel
+
+
+def _tail_start(point: xr.Dataset) -> int:
+    """The first lag index from which the renewal theory's velocity autocorrelation is 0
+    (beyond the longest go phase); the number of lags if it never is."""
+    theory = np.asarray(point["velocity_autocorrelation_renewal"].values, dtype=float)
+    nonzero = np.flatnonzero(theory != 0)  # NaN counts as non-zero
+    return int(nonzero[-1]) + 1 if nonzero.size else 0
+
+
+def correlation_tail(point: xr.Dataset) -> float:
+    """The fraction of the Green-Kubo D hat of one point and body (an analysis selection with
+    ``velocity_autocorrelation``) from the lags where the renewal theory's velocity
+    autocorrelation vanishes: the velocity correlations across go phases (1)."""
+    c = np.asarray(point["velocity_autocorrelation"].values, dtype=float)
+    dt = float(point["correlation_lag"].attrs["velocity_interval"])
+    k0 = _tail_start(point)
+    return float(2 * dt * c[k0:].sum() / correlation.green_kubo_slope(c, dt))
+
+
+def _correlation_samples(point: xr.Dataset, idx: np.ndarray) -> dict[str, np.ndarray]:
+    """Resampled Green-Kubo D hat, correlation tail and turn cosine of one point (resamples
+    ``idx`` [resample, realization] of its realizations)."""
+    each = np.asarray(point["velocity_autocorrelation_realization"].values, dtype=float)
+    dt = float(point["correlation_lag"].attrs["velocity_interval"])
+    k0 = _tail_start(point)
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # lags no resample reaches
+        c = np.nanmean(each[idx], axis=1)
+        slope = dt * (c[:, 0] + 2 * c[:, 1:].sum(axis=1))
+        pairs = np.asarray(point["go_turn_pairs"].values, dtype=float)
+        cos = np.nan_to_num(np.asarray(point["go_turn_cosine_realization"].values, dtype=float))
+        turn = (cos * pairs)[idx].sum(axis=1) / pairs[idx].sum(axis=1)
+        return {
+            "green_kubo_slope": slope,
+            "correlation_tail": 2 * dt * c[:, k0:].sum(axis=1) / slope,
+            "go_turn_cosine": turn,
+        }
 
 
 @dataclass(frozen=True)

@@ -62,6 +62,20 @@ def msd_slope(lag, msd, lo: float) -> tuple[float, float, int]:
     return fit.coefficient, fit.error, fit.points
 
 
+def affine_slope(lag, msd, lo: float) -> float:
+    """D hat (cm^2/s) of MSD = D hat tau + b over tau >= lo (s), least squares in relative
+    error (each lag weighted by 1 / MSD, as a fit in log space weights it): unlike
+    :func:`msd_slope`, not biased by the MSD's offset b at long lags (b < 0 after a
+    ballistic start: MSD ~ D hat (tau - tau_c))."""
+    lag = np.asarray(lag, dtype=np.float64)
+    msd = np.asarray(msd, dtype=np.float64)
+    use = (lag >= lo) & np.isfinite(msd) & (msd > 0)
+    if use.sum() < 2:
+        return np.nan
+    design = np.stack([lag[use], np.ones(int(use.sum()))], axis=1) / msd[use, None]
+    return float(np.linalg.lstsq(design, np.ones(int(use.sum())), rcond=None)[0][0])
+
+
 def crossover_time(velocity: float, slope: float) -> float:
     """tau* (s) where v^2 tau^2 = D hat tau, i.e. D hat / v^2 (the paper's Delta_c ~ v tau^2
     means v^2)."""

@@ -22,8 +22,9 @@ pyfftw.interfaces.cache.enable()
 _FFT = {"planner_effort": "FFTW_ESTIMATE"}
 
 
-def _correlations(a: np.ndarray, b: np.ndarray | None, n: int) -> np.ndarray:
-    """sum_i a_i b_(i+m) for m = 0..T-1 along the last axis (b = a if None)."""
+def correlate(a: np.ndarray, b: np.ndarray | None, n: int) -> np.ndarray:
+    """sum_i a_i b_(i+m) for m = 0..T-1 along the last axis (b = a if None), by FFTs of
+    length n >= 2 T (no wrap-around)."""
     size = a.shape[-1]
     fa = fftw.rfft(a, n=n, axis=-1, **_FFT)
     fb = fa if b is None else fftw.rfft(b, n=n, axis=-1, **_FFT)
@@ -55,7 +56,7 @@ def msd_sums(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r = np.where(valid[:, None], r - r[valid].mean(axis=0), 0.0)
     q = np.sum(r * r, axis=1)
     n = next_fast_len(2 * size, real=True)
-    cross = _correlations(r.T, None, n).sum(axis=0)
+    cross = correlate(r.T, None, n).sum(axis=0)
     if valid.all():
         # corr(1, q)(m) + corr(q, 1)(m) = sum_(i >= m) q_i + sum_(i < T - m) q_i, exactly.
         tail = np.cumsum(q[::-1])[::-1]
@@ -64,8 +65,8 @@ def msd_sums(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         pairs = np.arange(size, 0, -1, dtype=np.float64)
     else:
         w = valid.astype(np.float64)
-        squares = _correlations(w, q, n) + _correlations(q, w, n)
-        pairs = np.rint(_correlations(w, None, n))
+        squares = correlate(w, q, n) + correlate(q, w, n)
+        pairs = np.rint(correlate(w, None, n))
     sums = squares - 2.0 * cross
     sums[pairs <= 0] = 0.0
     return np.maximum(sums, 0.0), np.maximum(pairs, 0.0)

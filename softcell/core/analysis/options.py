@@ -52,6 +52,13 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
             maximum=1.0,
         ),
         ParameterSpec(
+            "correlation_max_lag",
+            10.0,
+            "s",
+            "longest lag of the velocity autocorrelation",
+            minimum=0.0,
+        ),
+        ParameterSpec(
             "ballistic_window",
             0.1,
             "1",

@@ -20,12 +20,13 @@ import numpy as np
 import xarray as xr
 
 from softcell._version import __version__
-from softcell.core.analysis import fits, stopgo
+from softcell.core.analysis import correlation, fits, stopgo
 from softcell.core.analysis.detector import DetectorChoice, choose_detector, split_options
 from softcell.core.analysis.msd import log_lags, msd_sums
 from softcell.core.analysis.options import analysis_options, options_attrs
 from softcell.core.analysis.series import (
     decimation,
+    segment_index,
     segments,
     shape_index,
     speed,
@@ -221,6 +222,18 @@ class _Setup:
         )
         self.lead = sweep_dims(ds)
         self.points = _points(ds, self.lead)
+        self.segment = segment_index(self.time)
+        self.fine_index = segments(self.time).index(self.plan.fine)
+        if self.plan.coarse_lags.size:  # the whole record on the coarse grid
+            self.correlation_grid = self.plan.grid
+            self.correlation_interval = self.plan.coarse_interval
+        else:
+            self.correlation_grid = np.arange(self.plan.fine.first, self.plan.fine.last + 1)
+            self.correlation_interval = self.plan.fine.interval
+        self.correlation_lags = min(
+            int(round(opts["correlation_max_lag"] / self.correlation_interval)),
+            max(self.correlation_grid.size - 2, 0),
+        )
 
 
 class _Results:
@@ -244,6 +257,26 @@ class _Results:
         self.ipr = np.full((len(setup.points), n_real, n_t), np.nan)
         self.gc_distance = np.full(len(setup.points), np.nan)
         self.durations: dict[tuple[int, int, int], np.ndarray] = {}
+        n_corr = setup.correlation_lags + 1
+        self.vacf_sums = np.zeros((*shape, n_real, n_corr))
+        self.vacf_pairs = np.zeros((*shape, n_real, n_corr))
+        self.turns = np.zeros((*shape, n_real, 5))  # phases, |l| sum, |l|^2 sum, pairs, cos sum
+
+
+def _correlations(
+    setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray, y: np.ndarray, lab: np.ndarray
+) -> None:
+    """Velocity autocorrelation (on the correlation grid) and go-phase turns (in the finest
+    segment) of each realization of one body at point i, into ``res``."""
+    grid = setup.correlation_grid
+    for r in range(x.shape[0]):
+        pos = np.stack([x[r], y[r]], axis=-1)
+        on_grid = np.where((grid >= 0)[:, None], pos[np.maximum(grid, 0)], np.nan)
+        res.vacf_sums[i, b, r], res.vacf_pairs[i, b, r] = correlation.velocity_autocorrelation(
+            on_grid, setup.correlation_interval, setup.correlation_lags
+        )
+        t = correlation.turn_statistics(pos, lab[r], setup.segment, setup.fine_index)
+        res.turns[i, b, r] = t.phases, t.length_sum, t.square_sum, t.pairs, t.cosine_sum
 
 
 def _body_statistics(
@@ -257,6 +290,7 @@ def _body_statistics(
     res.speeds[i, b] = s
     lab = stopgo.label(setup.detector, s, time)
     res.labels[i, b] = lab
+    _correlations(setup, res, i, b, x, y, lab)
     d = stopgo.durations(lab, time, only)
     for kind, values in ((stopgo.GO, d.go), (stopgo.STOP, d.stop)):
         res.durations[(i, b, kind)] = values
@@ -356,6 +390,7 @@ def _pooled_statistics(
     opts = setup.opts
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = res.gc_distance / radius
+    corr = _pooled_correlations(setup, res, durations[stopgo.GO])
     regime = np.full(len(setup.points), REGIMES["unknown"], dtype=np.int8)
     regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
     regime[(ratio > opts["coupled_below"]) & (ratio < opts["decoupled_above"])] = REGIMES[
@@ -384,12 +419,50 @@ def _pooled_statistics(
         "stop_events": res.stop_events,
         "diffusion_coefficient": res.scalars["msd_slope"] / 4,
         "msd_slope_theory": 2 * v0_hat**2 * tau_g,
+        **corr,
         "ipr": res.ipr,
         "ipr_mean": ipr_mean,
         "gc_distance": res.gc_distance,
         "gc_distance_ratio": ratio,
         "regime": regime,
     }, edges
+
+
+def _pooled_correlations(setup: _Setup, res: _Results, go: np.ndarray) -> dict[str, np.ndarray]:
+    """The velocity autocorrelations (pooled, per realization, the renewal theory's), the
+    Green-Kubo D hat, the renewal theory's MSD curve and the go phases' turn statistics, by
+    variable name; ``go`` [point, body, event] the pooled go durations (s)."""
+    dt, k = setup.correlation_interval, setup.correlation_lags
+    v0_hat = res.scalars["v0_hat"]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        total = res.vacf_pairs.sum(axis=2)
+        pooled = np.where(total > 0, res.vacf_sums.sum(axis=2) / total, np.nan)
+        each = np.where(res.vacf_pairs > 0, res.vacf_sums / res.vacf_pairs, np.nan)
+        t = res.turns
+        sums = t.sum(axis=2)
+        cosine = sums[..., 4] / sums[..., 3]
+        cosine_each = np.where(t[..., 3] > 0, t[..., 4] / t[..., 3], np.nan)
+        length, square = sums[..., 1] / sums[..., 0], sums[..., 2] / sums[..., 0]
+    theory_msd = np.full(res.msd.shape, np.nan)
+    theory_vacf = np.full(pooled.shape, np.nan)
+    slope = np.full(res.shape, np.nan)
+    for i, b in np.ndindex(*res.shape):
+        slope[i, b] = correlation.green_kubo_slope(pooled[i, b], dt)
+        if np.isfinite(v0_hat[i, b]):
+            theory_msd[i, b] = correlation.renewal_msd(setup.plan.lag, v0_hat[i, b], go[i, b])
+            theory_vacf[i, b] = correlation.renewal_autocorrelation(dt, k, v0_hat[i, b], go[i, b])
+    return {
+        "msd_theory_renewal": theory_msd,
+        "velocity_autocorrelation": pooled,
+        "velocity_autocorrelation_realization": each,
+        "velocity_autocorrelation_renewal": theory_vacf,
+        "green_kubo_slope": slope,
+        "go_turn_cosine": cosine,
+        "go_turn_cosine_realization": cosine_each,
+        "go_turn_pairs": t[..., 3].astype(np.int64),
+        "go_displacement_mean": length,
+        "go_displacement_mean_square": square,
+    }
 
 
 def _analysis_dataset(
@@ -435,6 +508,15 @@ def _analysis_dataset(
                 "threshold_shift",
                 setup.shifts,
                 {"units": "cm s-1", "long_name": "shift of the stop/go threshold"},
+            ),
+            "correlation_lag": (
+                "correlation_lag",
+                setup.correlation_interval * np.arange(setup.correlation_lags + 1),
+                {
+                    "units": "s",
+                    "long_name": "lag of the velocity autocorrelation",
+                    "velocity_interval": setup.correlation_interval,
+                },
             ),
         }
     )
