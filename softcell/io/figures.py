@@ -155,17 +155,19 @@ def _speed_series(
     )
 
 
+def _band(ax, lag: np.ndarray, msd: np.ndarray, sem: np.ndarray, color) -> None:
+    """The MSD's standard error as a shaded band (clipped above 0 for the log axis)."""
+    low = np.maximum(msd - sem, msd * 1e-3)
+    ax.fill_between(lag, low, msd + sem, color=color, alpha=0.25, lw=0)
+
+
 def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
     radii = analysis["radius"].values
     lag = analysis["lag"].values
     for r, color in zip(radii, _radius_colors(radii), strict=True):
-        ax.plot(
-            lag,
-            analysis["msd"].sel(radius=r, body=body).values,
-            color=color,
-            lw=1,
-            label=f"R = {r:g} cm",
-        )
+        m = analysis["msd"].sel(radius=r, body=body).values
+        ax.plot(lag, m, color=color, lw=1, label=f"R = {r:g} cm")
+        _band(ax, lag, m, analysis["msd_sem"].sel(radius=r, body=body).values, color)
     _msd_axes(ax)
     ax.legend(fontsize=6, ncol=2)
 
@@ -380,17 +382,16 @@ def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
     fig = _figure(5.5, 4.2)
     ax = fig.subplots()
     radii = analysis["radius"].values
+    lag = analysis["lag"].values
     for r, color in zip(radii, _radius_colors(radii), strict=True):
-        ax.plot(
-            analysis["lag"].values,
-            analysis["msd"].sel(radius=r, body="bot").values,
-            color=color,
-            lw=0.8,
-            label=f"in membrane, R = {r:g} cm",
-        )
-    free = free_bot["msd"].sel(body="bot")
+        m = analysis["msd"].sel(radius=r, body="bot").values
+        ax.plot(lag, m, color=color, lw=0.8, label=f"in membrane, R = {r:g} cm")
+        _band(ax, lag, m, analysis["msd_sem"].sel(radius=r, body="bot").values, color)
+    free, free_sem = (free_bot[v].sel(body="bot") for v in ("msd", "msd_sem"))
     free = free.isel({d: 0 for d in free.dims if d != "lag"})
+    free_sem = free_sem.isel({d: 0 for d in free_sem.dims if d != "lag"})
     ax.plot(free_bot["lag"].values, free.values, "k-", lw=2, label="free bot")
+    _band(ax, free_bot["lag"].values, free.values, free_sem.values, "k")
     _msd_axes(ax)
     ax.legend(fontsize=6, ncol=2)
     return fig
@@ -505,6 +506,7 @@ THEORY_NEEDS = (
 NEEDS = {
     "analysis": (
         "msd",
+        "msd_sem",
         "lag",
         "scaled_duration",
         "stop_pdf",
@@ -528,7 +530,7 @@ NEEDS = {
         "v0_hat",
         "msd_slope_theory",
     ),
-    "free_bot": ("msd", "lag"),
+    "free_bot": ("msd", "msd_sem", "lag"),
 }
 
 
