@@ -109,9 +109,9 @@ def main() -> None:
         "convergence": convergence(args.convergence),
     }
     (args.output / "mechanisms.json").write_text(json.dumps(result, indent=1) + "\n")
-    for stem, row in result["free_bot"].items():
+    for row in result["free_bot"].values():
         print(f"| {row['what']} | {row['D']:.1f} ± {row['D_error']:.1f} |")
-    for name, row in result["convergence"].items():
+    for row in result["convergence"].values():
         for i, radius in enumerate(row["radius"]):
             cells = " | ".join(f"{row[k][i]:.4g} ± {row[k + '_error'][i]:.2g}" for k in KEYS)
             print(f"| {row['what']} | {radius:g} | {cells} |")
