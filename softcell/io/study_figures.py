@@ -157,7 +157,8 @@ def values_figure(
     return "sensitivity.png"
 
 
-_VERDICT_CODE = {"agrees": 2, "partly": 1, "differs": 0}
+_VERDICT_CODE = {"agrees": 2, "partly": 1, "differs": 0, "holds by construction": 3}
+_VERDICT_TEXT = {2: "agrees", 1: "partly", 0: "differs", 3: "by\nconstruction"}
 
 
 def verdicts_figure(
@@ -183,15 +184,12 @@ def verdicts_figure(
         figsize=(max(6.5, 3.5 + 0.75 * len(variants)), 0.9 + 0.42 * len(topics)),
         constrained_layout=True,
     )
-    cmap = ListedColormap(["#e57373", "#ffb74d", "#81c784"]).with_extremes(bad="#dddddd")
-    ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0, vmax=2, aspect="auto")
+    colors = ["#e57373", "#ffb74d", "#81c784", "#90caf9"]
+    cmap = ListedColormap(colors).with_extremes(bad="#dddddd")
+    ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=3.5, aspect="auto")
     reference = grid[:, :1]
     for (i, j), code in np.ndenumerate(grid):
-        text = (
-            {2: "agrees", 1: "partly", 0: "differs"}.get(int(code), "n/m")
-            if np.isfinite(code)
-            else "n/m"
-        )
+        text = _VERDICT_TEXT.get(int(code), "n/m") if np.isfinite(code) else "n/m"
         flipped = (
             j > 0 and not (np.isnan(code) and np.isnan(reference[i, 0])) and code != reference[i, 0]
         )
