@@ -54,14 +54,13 @@ def _model(ds: xr.Dataset, registry: Registry):
     if not components.get("membrane", True):
         raise SoftcellError("a free-bot simulation has no membrane to act on the bot")
     params = registry.parameters(values, components)
-    model = build_model(
+    return build_model(
         params,
         components["energy_terms"],
         components["driving_protocol"],
         friction_law=components.get("friction_law", "viscous"),
         registry=registry,
     )
-    return model
 
 
 def bot_reaction(

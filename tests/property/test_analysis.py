@@ -169,35 +169,26 @@ def test_turns_between_go_phases_are_measured_and_carry_the_msd_slope():
     times = two_rate_times(0.01, 0.1, 100.0, 1000.0)
     planted = 2 * v**2 * tg**2 / ((1 - 0.5) * (tg + ts))
     options = {"max_lag_fraction": 0.25, "correlation_max_lag": 40.0}
-    kept = analyze(
-        stop_and_go_dataset(
-            np.random.default_rng(8),
+
+    def cell(seed: int, turn: float | None):
+        ds = stop_and_go_dataset(
+            np.random.default_rng(seed),
             times,
             realizations=60,
             speed=v,
             mean_go=tg,
             mean_stop=ts,
             nodes=4,
-            turn=np.pi / 3,
-        ),
-        options,
-    ).sel(body="cell")
+            turn=turn,
+        )
+        return analyze(ds, options).sel(body="cell")
+
+    kept = cell(8, np.pi / 3)
     assert float(kept.go_turn_cosine) == pytest.approx(0.5, abs=0.03)
     assert float(kept.green_kubo_slope) == pytest.approx(planted, rel=0.1)
     renewal = fits.renewal_msd_slope(float(kept.v0_hat), tg, 2 * tg**2)
     assert renewal == pytest.approx(planted / 2, rel=0.1)
-    fresh = analyze(
-        stop_and_go_dataset(
-            np.random.default_rng(9),
-            times,
-            realizations=60,
-            speed=v,
-            mean_go=tg,
-            mean_stop=ts,
-            nodes=4,
-        ),
-        options,
-    ).sel(body="cell")
+    fresh = cell(9, None)
     assert abs(float(fresh.go_turn_cosine)) < 0.03
     c = fresh.velocity_autocorrelation.values
     theory = fresh.velocity_autocorrelation_renewal.values
