@@ -57,3 +57,8 @@ class PluginWarning(UserWarning):
 class CacheWarning(UserWarning):
     """The compiled-model cache could not be used as is: a corrupt entry rebuilt, or a
     composition compiled in memory only because a bound function cannot be identified."""
+
+
+class AnalysisWarning(UserWarning):
+    """An analysis ran on data that limit it in a way its result shows: e.g. an MSD from a
+    record sampled at two intervals, without the bodies' fine record."""

@@ -428,6 +428,7 @@ def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path
         np.zeros((1, 9), complex),
         np.zeros((1, 3)),
         {"modes": np.zeros(9, complex)},
+        np.zeros(1, complex),
     )
     assert _simulate(out, radius="4") == 2
     assert "ckpt.npz was made with parameter radius = 9.0 there, 4.0" in capsys.readouterr().err

@@ -59,6 +59,16 @@ def sample_count(params) -> int:
     return int(n)
 
 
+def fine_count(params) -> int:
+    """Samples of one realization's fine body record (``engine.fine_times``)."""
+    return int(math.floor(float(params.duration) / float(params.sample_every) * (1 + 1e-12))) + 1
+
+
+#: Bytes of one sample of the fine body record in a file: five float64 (cell centre, bot
+#: pose) and the int8 phase.
+FINE_SAMPLE_BYTES = 5 * 8 + 1
+
+
 def sample_bytes(params) -> int:
     """Bytes of one stored sample in a simulation file (float64 membrane points, centre,
     bot pose and phase), before compression, which gains little on these data."""
@@ -67,7 +77,11 @@ def sample_bytes(params) -> int:
 
 def file_bytes(params) -> int:
     """Expected size (bytes) of one realization's simulation file."""
-    return sample_count(params) * sample_bytes(params) + 64 * 1024
+    return (
+        sample_count(params) * sample_bytes(params)
+        + fine_count(params) * FINE_SAMPLE_BYTES
+        + 64 * 1024
+    )
 
 
 def realization_bytes(params) -> dict[str, float]:
@@ -79,7 +93,9 @@ def realization_bytes(params) -> dict[str, float]:
     return {
         "nodes": float(params.nodes) * BYTES_PER_NODE,
         "cutoff": 8.0 * unknowns**2 * 8,  # rodas4's Jacobian, LU and stage matrices
-        "duration": sample_count(params) * per_sample + 17 * phases,
+        "duration": sample_count(params) * per_sample
+        + fine_count(params) * (40 + SAMPLE_OVERHEAD * FINE_SAMPLE_BYTES)
+        + 17 * phases,
     }
 
 

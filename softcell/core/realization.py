@@ -18,7 +18,15 @@ from softcell.config import CHECKPOINT_EVERY
 from softcell.core.components.contracts import Schedule, Stepper
 from softcell.core.engine.model import Model
 from softcell.core.engine.probe import diagnose
-from softcell.core.engine.state import Record, check_state, initial_state, phase_at, sample_times
+from softcell.core.engine.state import (
+    Record,
+    check_state,
+    fine_times,
+    initial_state,
+    phase_at,
+    sample_times,
+    sampling_plan,
+)
 from softcell.core.interrupt import received
 from softcell.errors import Interrupted, SimulationError
 
@@ -36,12 +44,17 @@ def realization_rng(seed: int, point: int, realization: int) -> np.random.Genera
 
 @dataclass
 class Saved:
-    """What a checkpoint holds: the samples recorded so far and the stepper's state."""
+    """What a checkpoint holds: the samples recorded so far and the stepper's state.
 
-    next_sample: int  # index of the first sample not yet recorded
-    modes_record: np.ndarray  # (next_sample, modes) complex, cm
+    Sample indices count the sampling grid of :func:`~softcell.core.engine.state.sampling_plan`
+    (the membrane's times and the bodies' fine times together).
+    """
+
+    next_sample: int  # index of the first grid sample not yet recorded
+    modes_record: np.ndarray  # (membrane samples so far, modes) complex, cm
     pose_record: np.ndarray  # (next_sample, 3): x (cm), y (cm), angle (rad)
     state: dict[str, np.ndarray]  # the stepper's state after sample next_sample - 1
+    center_record: np.ndarray | None = None  # (next_sample,) complex: g_0 (cm)
 
 
 class Checkpoint(Protocol):
@@ -52,6 +65,43 @@ class Checkpoint(Protocol):
 
     def save(self, saved: Saved) -> None:
         """Keep ``saved`` (replacing what was kept before), all or nothing."""
+
+
+@dataclass
+class _Grid:
+    """The samples of one realization on its sampling grid (see :class:`Saved`)."""
+
+    times: np.ndarray  # float64[G], s
+    membrane: np.ndarray  # int64[T]: grid index of each membrane sample
+    fine: np.ndarray  # int64[F]: grid index of each fine sample
+    modes: np.ndarray  # complex128[T, 2 Lc + 1]
+    pose: np.ndarray  # float64[G, 3]
+    center: np.ndarray  # complex128[G]
+
+    def membrane_before(self, sample: int) -> int:
+        """Membrane samples among the first ``sample`` grid samples."""
+        return int(np.searchsorted(self.membrane, sample))
+
+    def saved(self, sample: int, state: dict[str, np.ndarray]) -> Saved:
+        return Saved(
+            sample,
+            self.modes[: self.membrane_before(sample)],
+            self.pose[:sample],
+            state,
+            self.center[:sample],
+        )
+
+    def restore(self, saved: Saved) -> None:
+        first = saved.next_sample
+        self.modes[: self.membrane_before(first)] = saved.modes_record
+        self.pose[:first], self.center[:first] = saved.pose_record, saved.center_record
+
+    def keep(self, chunk: slice, modes: np.ndarray, pose: np.ndarray, cutoff: int) -> None:
+        """Record the stepper's samples of grid ``chunk``: every pose and centre, the modes
+        of the membrane samples alone."""
+        self.pose[chunk], self.center[chunk] = pose, modes[:, cutoff]
+        lo, hi = self.membrane_before(chunk.start), self.membrane_before(chunk.stop)
+        self.modes[lo:hi] = modes[self.membrane[lo:hi] - chunk.start]
 
 
 def run_realization(
@@ -65,7 +115,9 @@ def run_realization(
     progress: Callable[[float], None] | None = None,
     stop: Callable[[], bool] | None = None,
 ) -> Record:
-    """Integrate one realization over the sampling grid of ``model.params``.
+    """Integrate one realization over the sampling grid of ``model.params``: the membrane at
+    :func:`~softcell.core.engine.state.sample_times`, the cell's centre and the bot's pose
+    also at :func:`~softcell.core.engine.state.fine_times` (the record's ``fine_*`` fields).
 
     Parameters
     ----------
@@ -83,31 +135,34 @@ def run_realization(
         On Ctrl-C (a ``KeyboardInterrupt``) or ``stop``, after saving the checkpoint of the
         last finished chunk; its message says where the run stopped.
     """
-    times = sample_times(model.params)
+    times, membrane, fine = sampling_plan(model.params)
     modes, pose, schedule = initial_state(model, rng)
     state = stepper.start(modes, pose, schedule)
-    rec_modes = np.empty((times.size, modes.size), dtype=np.complex128)
-    rec_pose = np.empty((times.size, 3))
-    first, state = _resume(checkpoint, state, rec_modes, rec_pose)
+    grid = _Grid(
+        times,
+        membrane,
+        fine,
+        np.empty((membrane.size, modes.size), dtype=np.complex128),
+        np.empty((times.size, 3)),
+        np.empty(times.size, dtype=np.complex128),
+    )
+    first, state = _restored(checkpoint, grid, state)
     if first and progress:
         progress(float(times[first - 1]))
     last_save = time.monotonic()
     if first == 0:
         check_state(state, model, label)
-        rec_modes[0], rec_pose[0] = state["modes"], state["pose"]
+        grid.keep(slice(0, 1), state["modes"][None], state["pose"][None], model.cutoff)
         first = 1
 
     def keep(next_sample: int, kept_state: dict[str, np.ndarray]) -> None:
-        checkpoint.save(
-            Saved(next_sample, rec_modes[:next_sample], rec_pose[:next_sample], kept_state)
-        )
+        checkpoint.save(grid.saved(next_sample, kept_state))
 
     done, done_state = first, _copy_state(state)  # the last consistent point
-    record = Record(times, rec_modes, rec_pose, schedule.phase)
     try:
         for i in range(first, times.size, SAMPLES_PER_CALL):
             j = min(i + SAMPLES_PER_CALL, times.size)
-            _sample_checked(model, stepper, state, schedule, record, slice(i, j), label)
+            _sample_checked(model, stepper, state, schedule, grid, slice(i, j), label)
             done, done_state = j, _copy_state(state)
             if progress:
                 progress(float(times[j - 1] - times[i - 1]))
@@ -124,23 +179,30 @@ def run_realization(
             f"interrupted at t = {times[done - 1]:.2f} s of {label}"
             + ("; rerun the same command to resume" if checkpoint else "")
         ) from None
-    return Record(times, rec_modes, rec_pose, phase_at(schedule, times), state)
+    membrane_times, fine_times_ = sample_times(model.params), fine_times(model.params)
+    return Record(
+        membrane_times,
+        grid.modes,
+        grid.pose[membrane],
+        phase_at(schedule, membrane_times),
+        state,
+        fine_times=fine_times_,
+        fine_center=grid.center[fine],
+        fine_pose=grid.pose[fine],
+        fine_phase=phase_at(schedule, fine_times_),
+    )
 
 
-def _resume(
-    checkpoint: Checkpoint | None,
-    state: dict[str, np.ndarray],
-    rec_modes: np.ndarray,
-    rec_pose: np.ndarray,
+def _restored(
+    checkpoint: Checkpoint | None, grid: _Grid, state: dict[str, np.ndarray]
 ) -> tuple[int, dict[str, np.ndarray]]:
-    """The first sample still to compute and the state to compute it from: the checkpoint's
-    (its samples copied into the records), or 0 and ``state``."""
+    """The first grid sample still to compute and the state to compute it from: the
+    checkpoint's (its samples copied into ``grid``), or 0 and ``state``."""
     saved = checkpoint.load() if checkpoint is not None else None
     if saved is None:
         return 0, state
-    first = saved.next_sample
-    rec_modes[:first], rec_pose[:first] = saved.modes_record, saved.pose_record
-    return first, {k: v.copy() for k, v in saved.state.items()}
+    grid.restore(saved)
+    return saved.next_sample, {k: v.copy() for k, v in saved.state.items()}
 
 
 def _sample_checked(
@@ -148,28 +210,26 @@ def _sample_checked(
     stepper: Stepper,
     state: dict[str, np.ndarray],
     schedule: Schedule,
-    record: Record,
+    grid: _Grid,
     chunk: slice,
     label: object,
 ) -> None:
-    """Sample ``chunk`` of ``record.times`` into the record and check it; a failure is
+    """Sample ``chunk`` of ``grid.times`` into the grid's records and check it; a failure is
     re-raised with :func:`~softcell.core.engine.probe.diagnose`'s finding appended."""
     filled = chunk.start  # samples recorded so far (finite or not)
     try:
-        record.modes[chunk], record.pose[chunk] = stepper.sample(
-            state, schedule, record.times[chunk]
-        )
+        modes, pose = stepper.sample(state, schedule, grid.times[chunk])
+        grid.keep(chunk, modes, pose, model.cutoff)
         filled = chunk.stop
-        check_state(
-            state, model, label, record.times[chunk], record.modes[chunk], record.pose[chunk]
-        )
+        check_state(state, model, label, grid.times[chunk], modes, pose)
     except SimulationError as exc:
         modes, pose, t = stepper.current(state)  # a failed step may run ahead of the samples
+        n = grid.membrane_before(filled)
         why = diagnose(
             model,
-            np.append(record.times[:filled], t),
-            np.vstack([record.modes[:filled], modes[None]]),
-            np.vstack([record.pose[:filled], pose[None]]),
+            np.append(grid.times[grid.membrane[:n]], t),
+            np.vstack([grid.modes[:n], modes[None]]),
+            np.vstack([grid.pose[grid.membrane[:n]], pose[None]]),
             schedule,
         )
         raise SimulationError(f"{exc}; {why}") from None
@@ -218,4 +278,23 @@ def record_dataset(
         components=components,
         extra_attrs=extra_attrs,
         scalar_coords=scalar_coords,
+        fine=_fine_record(record, model),
     )
+
+
+def _fine_record(record: Record, model: Model) -> dict[str, np.ndarray] | None:
+    """The bodies' fine record as :func:`~softcell.core.schema.simulation_dataset` takes it."""
+    if record.fine_times is None:
+        return None
+    center = record.fine_center
+    if not model.has_membrane:
+        center = np.full(center.shape, complex(np.nan, np.nan))
+    return {
+        "fine_time": record.fine_times,
+        "cell_x_fine": center.real[None],
+        "cell_y_fine": center.imag[None],
+        "bot_x_fine": record.fine_pose[None, :, 0],
+        "bot_y_fine": record.fine_pose[None, :, 1],
+        "bot_angle_fine": record.fine_pose[None, :, 2],
+        "bot_phase_fine": record.fine_phase[None],
+    }

@@ -94,6 +94,26 @@ VARIABLES: dict[str, VariableSpec] = {
     )
 }
 
+#: The bodies' fine record (optional): the cell's centre and the bot's pose at every
+#: ``sample_every`` over the whole run, on their own time axis ``fine_time``, so that
+#: analyses of the bodies (the MSD at every lag) use one record (docs/model.md §6). Absent
+#: from tracked videos and from files of softcell before 0.3.
+FINE_COORDINATE = VariableSpec(
+    "fine_time", ("fine_time",), "f", "s", "time of the bodies' fine record"
+)
+FINE_VARIABLES: dict[str, VariableSpec] = {
+    f"{name}_fine": VariableSpec(
+        f"{name}_fine",
+        ("realization", "fine_time"),
+        spec.kind,
+        spec.units,
+        f"{spec.long_name} (fine record)",
+        dict(spec.attrs),
+    )
+    for name, spec in VARIABLES.items()
+    if name.startswith(("cell_", "bot_"))
+}
+
 #: Stands for the sweep dims (one per swept parameter, maybe none) in an analysis variable's
 #: dims.
 SWEEP = "..."
@@ -399,15 +419,21 @@ def problems(ds: xr.Dataset) -> list[str]:
     found: list[str] = []
     for spec in (*COORDINATES.values(), *VARIABLES.values()):
         found.extend(_variable_problems(ds, spec))
+    found.extend(_fine_problems(ds))
     if "time" in ds.coords and ds.sizes.get("time", 0) > 1:
         if not bool(np.all(np.diff(ds["time"].values) > 0)):
             found.append("time: values must increase strictly")
-    phase = ds.get("bot_phase")
-    if phase is not None and not np.isin(np.unique(phase.values), PHASE_FLAGS).all():
-        found.append(f"bot_phase: values outside the flag values {PHASE_FLAGS.tolist()}")
-    for name in REQUIRED_ATTRS:
-        if name not in ds.attrs:
-            found.append(f"global attribute {name!r} is missing")
+    found.extend(
+        f"{name}: values outside the flag values {PHASE_FLAGS.tolist()}"
+        for name in ("bot_phase", "bot_phase_fine")
+        if name in ds.variables and not np.isin(np.unique(ds[name].values), PHASE_FLAGS).all()
+    )
+    return found + _attribute_problems(ds)
+
+
+def _attribute_problems(ds: xr.Dataset) -> list[str]:
+    """How the global attributes depart from the schema."""
+    found = [f"global attribute {n!r} is missing" for n in REQUIRED_ATTRS if n not in ds.attrs]
     if ds.attrs.get("Conventions", CONVENTIONS) != CONVENTIONS:
         found.append(f"global attribute Conventions must be {CONVENTIONS!r}")
     origin = ds.attrs.get("softcell_origin")
@@ -417,6 +443,19 @@ def problems(ds: xr.Dataset) -> list[str]:
         for name in SIMULATION_ATTRS:
             if name not in ds.attrs:
                 found.append(f"global attribute {name!r} is missing (required for simulations)")
+    return found
+
+
+def _fine_problems(ds: xr.Dataset) -> list[str]:
+    """How the bodies' fine record departs from the schema: optional, but all or nothing."""
+    if not any(n in ds.variables for n in (FINE_COORDINATE.name, *FINE_VARIABLES)):
+        return []
+    found = []
+    for spec in (FINE_COORDINATE, *FINE_VARIABLES.values()):
+        found.extend(_variable_problems(ds, spec))
+    if "fine_time" in ds.coords and ds.sizes.get("fine_time", 0) > 1:
+        if not bool(np.all(np.diff(ds["fine_time"].values) > 0)):
+            found.append("fine_time: values must increase strictly")
     return found
 
 
@@ -489,6 +528,7 @@ def simulation_dataset(
     cell_y: np.ndarray | None = None,
     extra_attrs: Mapping[str, Any] | None = None,
     scalar_coords: Sequence[str] = ("radius",),
+    fine: Mapping[str, np.ndarray] | None = None,
 ) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
@@ -515,6 +555,10 @@ def simulation_dataset(
     scalar_coords : sequence of str
         Parameters also stored as scalar coordinates with their units and long names (the
         swept ones: a sweep's files then combine with plain xarray along them).
+    fine : mapping, optional
+        The bodies' fine record: ``fine_time`` (float64[F], s) and every variable of
+        :data:`FINE_VARIABLES` ([R, F]: ``cell_x_fine`` ... in cm, ``bot_angle_fine`` in rad,
+        ``bot_phase_fine`` int8).
     """
     if cell_x is None:
         cell_x = membrane_x.mean(axis=-1)
@@ -544,6 +588,17 @@ def simulation_dataset(
         "time": ("time", np.asarray(time, dtype=np.float64), COORDINATES["time"].cf_attrs()),
         "node": ("node", np.arange(n_nodes, dtype=np.int64), COORDINATES["node"].cf_attrs()),
     }
+    if fine is not None:
+        coords["fine_time"] = (
+            "fine_time",
+            np.asarray(fine["fine_time"], dtype=np.float64),
+            FINE_COORDINATE.cf_attrs(),
+        )
+        for name, spec in FINE_VARIABLES.items():
+            values = np.asarray(fine[name])
+            if spec.name == "bot_phase_fine":
+                values = values.astype(np.int8)
+            data_vars[name] = (spec.dims, values, spec.cf_attrs())
     for name in dict.fromkeys(scalar_coords):
         spec = parameters.specs[name]
         coords[name] = ((), parameters[name], {"units": spec.unit, "long_name": spec.long_name})

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.engine import sample_times
+from softcell.core.engine import sampling_plan
 from softcell.errors import Interrupted, SoftcellError
 from softcell.workflows.tasks import STOP_FILE, Task, checkpoint_path, read_checkpoint, run_task
 
@@ -152,7 +152,8 @@ def _where(unfinished: list[Task], finished: int, total: int) -> str:
             data = None
         if data is not None:
             last = int(data["next_sample"]) - 1
-            saved.append(f"t = {float(sample_times(task.params)[last]):.2f} s of {task.name}")
+            grid = sampling_plan(task.params)[0]
+            saved.append(f"t = {float(grid[last]):.2f} s of {task.name}")
     where = ", ".join(saved) if saved else "t = 0 s of every unfinished realization"
     return (
         f"interrupted at {where} ({finished} of {total} realizations finished); rerun the "

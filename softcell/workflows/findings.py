@@ -470,9 +470,11 @@ def _theory_findings(sweep: _Sweep) -> list[Finding]:
             uncertainties={"radius": None, "ratio": _numbers(q_err)},
             unit={"radius": "cm", "ratio": "1"},
             cause=(
-                "the ballistic fit uses lags <= 0.1 <tau_g> of the 0.01 s samples from which "
-                "v0_hat is the RMS speed, so its first lag is MSD(dt) = <v^2> dt^2 = "
-                "v0_hat^2 dt^2 exactly, and the few lags after it are close to it"
+                "the ballistic fit uses lags <= 0.1 <tau_g> of the 0.01 s samples, so its "
+                "first lag is MSD(dt) = <v^2> dt^2, the mean square speed that defines "
+                "v0_hat^2 (taken over the whole run's fine record for the MSD, over the first "
+                "100 s for v0_hat: two samples of one quantity), and the few lags after it "
+                "are close to it"
             ),
         )
     )

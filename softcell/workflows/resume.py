@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from softcell.core.engine import sample_times
+from softcell.core.engine import fine_times, sample_times
 from softcell.core.limits import file_bytes
+from softcell.core.params import Parameters
 from softcell.errors import SoftcellError
 from softcell.workflows.tasks import Task, checkpoint_path, read_checkpoint, request_of
 
@@ -42,9 +43,9 @@ def first_mismatch(made: dict[str, Any], wanted: dict[str, Any]) -> str | None:
     return None
 
 
-def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
+def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray | None]:
     """The settings a simulation file was made with, in the form of :meth:`Task.request`,
-    and its sample times (s).
+    its sample times (s) and the times of its bodies' fine record (s; None without one).
 
     Raises
     ------
@@ -63,26 +64,36 @@ def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray]:
         if found:
             raise SoftcellError(f"it does not follow the simulation schema ({found[0]})")
         a = ds.attrs
-        return request_of(
-            json.loads(a["softcell_parameters"]),
-            json.loads(a["softcell_components"]),
-            int(a["softcell_seed"]),
-            str(a.get("softcell_spawn_key")),
-            a.get("softcell_version"),
-        ), np.asarray(ds["time"].values)
+        return (
+            request_of(
+                json.loads(a["softcell_parameters"]),
+                json.loads(a["softcell_components"]),
+                int(a["softcell_seed"]),
+                str(a.get("softcell_spawn_key")),
+                a.get("softcell_version"),
+            ),
+            np.asarray(ds["time"].values),
+            (np.asarray(ds["fine_time"].values) if "fine_time" in ds.coords else None),
+        )
 
 
-def _reuse_problem(path: Path, wanted: dict[str, Any], times: np.ndarray) -> str | None:
-    """Why the finished file ``path`` cannot stand for the request ``wanted``, or None."""
+def _reuse_problem(path: Path, wanted: dict[str, Any], params: Parameters) -> str | None:
+    """Why the finished file ``path`` cannot stand for the request ``wanted`` (whose
+    parameters are ``params``), or None."""
     try:
-        made, stored = stored_request(path)
+        made, stored, fine = stored_request(path)
     except SoftcellError as exc:
         return f"cannot be reused: {exc}"
     why = first_mismatch(made, wanted)
     if why:
         return f"was made with {why}"
+    times = sample_times(params)
     if not np.array_equal(stored, times):
         return f"is incomplete ({stored.size} samples, {times.size} expected)"
+    if fine is None:
+        return "was made by a softcell that did not record the bodies' fine record"
+    if not np.array_equal(fine, fine_times(params)):
+        return f"is incomplete ({fine.size} fine samples, {fine_times(params).size} expected)"
     return None
 
 
@@ -97,8 +108,11 @@ def _damage(path: Path) -> str | None:
 def _checkpoint_problem(checkpoint: Path, wanted: dict[str, Any]) -> str | None:
     """Why the checkpoint cannot resume the request ``wanted``, or None."""
     try:
-        made = json.loads(read_checkpoint(checkpoint)["request"] or "{}")
+        data = read_checkpoint(checkpoint)
+        made = json.loads(data["request"] or "{}")
         why = first_mismatch(made, wanted)
+        if not why and "center_record" not in data:
+            return "was made by a softcell that did not record the bodies' fine record"
         return why and f"was made with {why}"
     except (SoftcellError, ValueError):
         return "cannot be reused: it is truncated or corrupt"
@@ -168,7 +182,7 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
         path, checkpoint = Path(task.path), checkpoint_path(Path(task.path))
         wanted = task.request()
         if path.exists():
-            why = _reuse_problem(path, wanted, sample_times(task.params))
+            why = _reuse_problem(path, wanted, task.params)
             damage = _damage(path) if why is None else None
             if why is None and damage is None:
                 resume.reused += 1

@@ -149,11 +149,17 @@ class FileCheckpoint:
                 f"checkpoint {self.path} was made for another request; "
                 "remove it or rerun with --overwrite"
             )
+        if "center_record" not in data:
+            raise SoftcellError(
+                f"checkpoint {self.path} was made by a softcell without the bodies' fine "
+                "record; remove it or rerun with --overwrite"
+            )
         return Saved(
             int(data["next_sample"]),
             data["modes_record"],
             data["pose_record"],
             {k.removeprefix("state_"): v for k, v in data.items() if k.startswith("state_")},
+            data["center_record"],
         )
 
     def save(self, saved: Saved) -> None:
@@ -164,6 +170,7 @@ class FileCheckpoint:
             saved.modes_record,
             saved.pose_record,
             saved.state,
+            saved.center_record,
         )
 
 
@@ -174,16 +181,19 @@ def save_checkpoint(
     rec_modes: np.ndarray,
     rec_pose: np.ndarray,
     state: dict[str, np.ndarray],
+    rec_center: np.ndarray,
 ) -> None:
-    """Write a checkpoint atomically: the request (JSON), the first sample still to compute,
-    the samples so far (modes in cm, pose in cm and rad) and the stepper's state arrays."""
+    """Write a checkpoint atomically: the request (JSON), the first grid sample still to
+    compute, the samples so far (the membrane's modes in cm; the pose in cm and rad and the
+    centre g_0 in cm at every grid sample) and the stepper's state arrays."""
     with atomic_write(path) as tmp:
         np.savez(
             tmp,
             request=np.array(request),
             next_sample=np.array(next_sample),
-            modes_record=rec_modes[:next_sample],
+            modes_record=rec_modes,
             pose_record=rec_pose[:next_sample],
+            center_record=rec_center[:next_sample],
             **{f"state_{k}": v for k, v in state.items()},
         )
 

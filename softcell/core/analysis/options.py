@@ -35,6 +35,16 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
             minimum=0.0,
         ),
         ParameterSpec(
+            "msd_record",
+            "fine",
+            "1",
+            "where the bodies' MSD comes from: 'fine', the bodies' fine record over the whole "
+            "run where the file has one (otherwise as 'sampled', with a warning), or 'sampled', "
+            "the samples of the time axis (lags below short_lag_max from the finest segment)",
+            kind=str,
+            choices=("fine", "sampled"),
+        ),
+        ParameterSpec(
             "lags_per_decade",
             20,
             "1",

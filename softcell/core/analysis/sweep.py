@@ -34,10 +34,12 @@ from softcell.core.analysis.series import (
 from softcell.core.components.registry import Registry, default_registry
 from softcell.core.params import parameter_attrs
 from softcell.core.schema import ANALYSIS_VARIABLES, REGIMES, SWEEP
-from softcell.errors import ConfigError, SoftcellError
+from softcell.errors import AnalysisWarning, ConfigError, SoftcellError
 
 BODIES = ("cell", "bot")
 REQUIRED = ("cell_x", "cell_y", "bot_x", "bot_y", "membrane_x", "membrane_y")
+#: The bodies' fine record the MSD uses where a file has it.
+FINE_BODY_VARIABLES = ("cell_x_fine", "cell_y_fine", "bot_x_fine", "bot_y_fine")
 #: Scaling-collapse variants (docs/model.md §6): MSD * R^a against lag * R^b.
 COLLAPSE_VARIANTS = ((1 / 3, 1.0), (1 / 3, -1.0), (-1 / 3, 1.0), (-1 / 3, -1.0))
 COLLAPSE_GRID = 50
@@ -189,6 +191,31 @@ SCALARS = (
 )
 
 
+def _fine_record(
+    ds: xr.Dataset, opts: Mapping[str, Any], plan: LagPlan, start: float
+) -> np.ndarray | None:
+    """Which samples of the bodies' fine record (from ``start``, s) the MSD uses, or None to
+    use the sampled record: option ``msd_record`` 'sampled', or a file without a fine record
+    (with a warning where its sampled record has two sampling intervals, whose MSD steps
+    where they meet)."""
+    if opts["msd_record"] == "sampled":
+        return None
+    if all(n in ds.variables for n in ("fine_time", *FINE_BODY_VARIABLES)):
+        fine = np.asarray(ds["fine_time"].values, dtype=np.float64)
+        return fine >= start
+    if plan.coarse_lags.size:
+        warnings.warn(
+            "this dataset has no fine record of the bodies (a simulation of softcell "
+            "before 0.3, or data made elsewhere): their MSD takes lags below short_lag_max = "
+            f"{opts['short_lag_max']:g} s from the finest sampling segment alone and the "
+            "rest from the whole record, which makes a step where the two meet; simulate "
+            "again for an MSD from one record",
+            AnalysisWarning,
+            stacklevel=4,
+        )
+    return None
+
+
 class _Setup:
     """What every point of one analysis shares: options, detectors, the kept times, lags."""
 
@@ -215,6 +242,12 @@ class _Setup:
         self.keep = time_all >= time_all[0] + opts["discard"]
         self.time = time_all[self.keep]
         self.plan = LagPlan(self.time, opts)
+        self.fine_keep = _fine_record(ds, opts, self.plan, time_all[0] + opts["discard"])
+        self.msd_plan = self.plan
+        if self.fine_keep is not None:
+            fine = np.asarray(ds["fine_time"].values, dtype=np.float64)[self.fine_keep]
+            self.msd_plan = LagPlan(fine, opts)
+        self.lag = self.msd_plan.lag
         self.only = (
             segments(self.time).index(self.plan.fine)
             if opts["stopgo_segments"] == "finest"
@@ -241,7 +274,7 @@ class _Results:
 
     def __init__(self, setup: _Setup, n_real: int) -> None:
         shape = (len(setup.points), len(BODIES))
-        n_lag, n_t = setup.plan.lag.size, setup.time.size
+        n_lag, n_t = setup.lag.size, setup.time.size
         self.shape = shape
         self.scalars = {name: np.full(shape, np.nan) for name in SCALARS}
         self.go_events = np.zeros(shape, dtype=np.int64)
@@ -280,10 +313,17 @@ def _correlations(
 
 
 def _body_statistics(
-    setup: _Setup, res: _Results, i: int, b: int, x: np.ndarray, y: np.ndarray
+    setup: _Setup,
+    res: _Results,
+    i: int,
+    b: int,
+    x: np.ndarray,
+    y: np.ndarray,
+    fine: tuple[np.ndarray, np.ndarray] | None,
 ) -> None:
-    """Speeds, stop/go, MSD and fits of one body (positions x, y [realization, time], cm)
-    at point i, into row (i, b) of ``res``."""
+    """Speeds, stop/go, MSD and fits of one body (positions x, y [realization, time], cm;
+    ``fine`` its fine record [realization, fine_time], if the MSD uses it) at point i, into
+    row (i, b) of ``res``."""
     time, opts, plan, only = setup.time, setup.opts, setup.plan, setup.only
     out = res.scalars
     s = speed(x, y, time)
@@ -316,7 +356,8 @@ def _body_statistics(
     out["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
     out["v0_hat"][i, b] = fits.v0_hat(fine_speed)
 
-    pooled, sem, pairs, each = _ensemble_msd(plan, x, y)
+    pooled, sem, pairs, each = _ensemble_msd(setup.msd_plan, *(fine or (x, y)))
+    lag = setup.lag
     res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = (
         pooled,
         sem,
@@ -328,13 +369,13 @@ def _body_statistics(
     lo = opts["diffusive_window"] * tau_g
     out["ballistic_window_end"][i, b], out["diffusive_window_start"][i, b] = hi, lo
     if np.isfinite(tau_g):
-        v, v_err, _ = fits.ballistic_velocity(plan.lag, pooled, hi)
-        slope, slope_err, _ = fits.msd_slope(plan.lag, pooled, lo)
+        v, v_err, _ = fits.ballistic_velocity(lag, pooled, hi)
+        slope, slope_err, _ = fits.msd_slope(lag, pooled, lo)
         out["ballistic_velocity"][i, b], out["ballistic_velocity_error"][i, b] = v, v_err
         out["msd_slope"][i, b], out["msd_slope_error"][i, b] = slope, slope_err
         out["crossover_time"][i, b] = fits.crossover_time(v, slope)
         out["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
-            plan.lag, pooled, opts["confined_side"], lo
+            lag, pooled, opts["confined_side"], lo
         )[0]
 
 
@@ -347,7 +388,15 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
         x = np.asarray(sel[f"{body}_x"].transpose("realization", "time").values)[:, keep]
         y = np.asarray(sel[f"{body}_y"].transpose("realization", "time").values)[:, keep]
         pos[body] = (x, y)
-        _body_statistics(setup, res, i, b, x, y)
+        fine = None
+        if setup.fine_keep is not None:
+            fine = tuple(
+                np.asarray(sel[f"{body}_{c}_fine"].transpose("realization", "fine_time").values)[
+                    :, setup.fine_keep
+                ]
+                for c in "xy"
+            )
+        _body_statistics(setup, res, i, b, x, y, fine)
     mx = sel["membrane_x"].transpose("realization", "time", "node")
     my = sel["membrane_y"].transpose("realization", "time", "node")
     for r in range(res.ipr.shape[1]):
@@ -386,7 +435,7 @@ def _pooled_statistics(
     msd_theory = np.full(res.msd.shape, np.nan)
     for i, b in np.ndindex(*shape):
         if tau_g[i, b] > 0:
-            msd_theory[i, b] = fits.run_and_tumble_msd(setup.plan.lag, v0_hat[i, b], tau_g[i, b])
+            msd_theory[i, b] = fits.run_and_tumble_msd(setup.lag, v0_hat[i, b], tau_g[i, b])
     opts = setup.opts
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = res.gc_distance / radius
@@ -449,7 +498,7 @@ def _pooled_correlations(setup: _Setup, res: _Results, go: np.ndarray) -> dict[s
     for i, b in np.ndindex(*res.shape):
         slope[i, b] = correlation.green_kubo_slope(pooled[i, b], dt)
         if np.isfinite(v0_hat[i, b]):
-            theory_msd[i, b] = correlation.renewal_msd(setup.plan.lag, v0_hat[i, b], go[i, b])
+            theory_msd[i, b] = correlation.renewal_msd(setup.lag, v0_hat[i, b], go[i, b])
             theory_vacf[i, b] = correlation.renewal_autocorrelation(dt, k, v0_hat[i, b], go[i, b])
     return {
         "msd_theory_renewal": theory_msd,
@@ -463,6 +512,23 @@ def _pooled_correlations(setup: _Setup, res: _Results, go: np.ndarray) -> dict[s
         "go_displacement_mean": length,
         "go_displacement_mean_square": square,
     }
+
+
+def _lag_attrs(setup: _Setup) -> dict[str, Any]:
+    """The lag coordinate's attributes, with the record the MSD came from."""
+    if setup.fine_keep is not None:
+        record = (
+            f"every lag from the bodies' fine record (every {setup.msd_plan.fine.interval:g} s "
+            "over the whole run)"
+        )
+    elif setup.plan.coarse_lags.size:
+        record = (
+            f"lags below {setup.opts['short_lag_max']:g} s from the finest sampling segment, "
+            "longer ones from the whole record"
+        )
+    else:
+        record = "every lag from the whole record"
+    return {"units": "s", "long_name": "time lag", "msd_record": record}
 
 
 def _analysis_dataset(
@@ -479,7 +545,7 @@ def _analysis_dataset(
                 np.array(BODIES),
                 {"long_name": "moving body: cell (membrane GC) or bot"},
             ),
-            "lag": ("lag", setup.plan.lag, {"units": "s", "long_name": "time lag"}),
+            "lag": ("lag", setup.lag, _lag_attrs(setup)),
             "realization": (
                 "realization",
                 np.asarray(ds["realization"].values),
@@ -538,7 +604,7 @@ def _collapse_variables(
     """The scaling-collapse variants of a radius sweep, over its decoupled radii."""
     decoupled = values["regime"] == REGIMES["decoupled"]
     metric = _collapse(
-        setup.plan.lag,
+        setup.lag,
         values["msd"][decoupled, 0],
         radius[decoupled],
         values["diffusive_window_start"][decoupled, 0],

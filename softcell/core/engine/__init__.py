@@ -22,10 +22,12 @@ from softcell.core.engine.state import (
     check_state,
     circle_modes,
     equilibrium_radius,
+    fine_times,
     initial_state,
     membrane_length,
     phase_at,
     sample_times,
+    sampling_plan,
 )
 from softcell.errors import SimulationError
 
@@ -51,6 +53,8 @@ __all__ = [
     "membrane_jacobian",
     "membrane_length",
     "phase_at",
+    "fine_times",
     "sample_times",
+    "sampling_plan",
     "total_energy",
 ]

@@ -55,6 +55,34 @@ def sample_times(params: Parameters) -> np.ndarray:
     return times
 
 
+def fine_times(params: Parameters) -> np.ndarray:
+    """The grid (s) of the bodies' fine record: every ``sample_every`` from 0 up to and
+    including ``duration`` where it falls on the grid, over the whole run (the membrane, the
+    bulk of a sample, is thinned to :func:`sample_times`; the cell's centre and the bot's pose
+    are a few numbers a sample)."""
+    duration, early = float(params.duration), float(params.sample_every)
+    return np.arange(int(math.floor(duration / early * (1 + 1e-12))) + 1) * early
+
+
+def sampling_plan(params: Parameters) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The times (s) the stepper is sampled at: the union of :func:`sample_times` (the
+    membrane's) and :func:`fine_times` (the bodies'), increasing, times closer than 1e-9 of
+    their size counted once (at the membrane's value); and the index into it of each
+    membrane and each fine time."""
+    membrane, fine = sample_times(params), fine_times(params)
+    both = np.concatenate([membrane, fine])
+    order = np.argsort(both, kind="stable")
+    ordered = both[order]
+    new = np.ones(ordered.size, dtype=bool)
+    new[1:] = np.diff(ordered) > 1e-9 * np.maximum(1.0, np.abs(ordered[1:]))
+    slot = np.cumsum(new) - 1  # the grid index of each entry of ``ordered``
+    index = np.empty(both.size, dtype=np.int64)
+    index[order] = slot
+    grid = ordered[new]
+    grid[index[: membrane.size]] = membrane  # a shared time is the membrane's, to the bit
+    return grid, index[: membrane.size], index[membrane.size :]
+
+
 def phase_at(schedule: Schedule, times: np.ndarray) -> np.ndarray:
     """Phase code (int8) active at each time (s): the last phase started at or before it."""
     index = np.searchsorted(schedule.start, times, side="right") - 1
@@ -86,13 +114,18 @@ def _speeds(modes: np.ndarray, points: int) -> np.ndarray:
 
 @dataclass
 class Record:
-    """What a realization produced, before it becomes a Dataset."""
+    """What a realization produced, before it becomes a Dataset: the membrane's samples at
+    ``times`` and, if recorded, the bodies' fine record at ``fine_times``."""
 
     times: np.ndarray
     modes: np.ndarray  # complex128[T, 2 Lc + 1]
     pose: np.ndarray  # float64[T, 3]
     phase: np.ndarray  # int8[T]
     state: dict[str, np.ndarray] | None = None  # the integrator's state after the last sample
+    fine_times: np.ndarray | None = None  # float64[F], s
+    fine_center: np.ndarray | None = None  # complex128[F]: g_0, cm
+    fine_pose: np.ndarray | None = None  # float64[F, 3]
+    fine_phase: np.ndarray | None = None  # int8[F]
 
 
 def check_state(
