@@ -89,5 +89,54 @@ def _check_units(app, what, name, obj, options, lines):
         )
 
 
+def _undescribed(obj, doc: str) -> list[str]:
+    """The parameters of ``obj``'s signature that its numpydoc Parameters sections do not
+    describe (``self``, ``cls``, ``*args`` and ``**kwargs`` aside)."""
+    import inspect
+
+    from numpydoc.docscrape import NumpyDocString
+
+    try:
+        signature = inspect.signature(obj)
+    except (TypeError, ValueError):
+        return []
+    docs = [doc]
+    if inspect.isclass(obj):
+        # The constructor is described where it is defined: on that class or its __init__
+        # (a dataclass describes its fields as Attributes).
+        owner = next((c for c in obj.__mro__ if "__init__" in vars(c)), obj)
+        docs += [inspect.getdoc(owner) or "", inspect.getdoc(owner.__init__) or ""]
+    entries = []
+    for text in docs:
+        parsed = NumpyDocString(text)
+        entries += [*parsed["Parameters"], *parsed["Other Parameters"], *parsed["Attributes"]]
+    described = {n.strip().lstrip("*") for e in entries for n in e.name.split(",")}
+    skip = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
+    return [
+        name
+        for name, p in signature.parameters.items()
+        if name not in ("self", "cls") and p.kind not in skip and name not in described
+    ]
+
+
+def _check_parameters(app, what, name, obj, options, lines):
+    if what not in ("function", "method", "class") or name.split(".")[-1].startswith("_"):
+        return
+    import inspect
+
+    missing = _undescribed(obj, inspect.getdoc(obj) or "")
+    if missing:
+        from sphinx.util import logging
+
+        logging.getLogger(__name__).warning(
+            "the docstring of %s does not describe the parameter(s) %s",
+            name,
+            ", ".join(missing),
+            type="softcell",
+            subtype="parameters",
+        )
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _check_units)
+    app.connect("autodoc-process-docstring", _check_parameters)

@@ -187,3 +187,27 @@ def test_a_file_without_the_fine_record_is_recomputed_not_reused(tmp_path):
         _simulate(tmp_path / "sim")
     _simulate(tmp_path / "sim", overwrite=True)
     assert path.read_bytes() == original
+
+
+def test_a_sweep_over_durations_combines_both_time_axes_with_padding(tmp_path):
+    """Points of different durations have time axes of different lengths; combined, each
+    variable keeps its own axis (xarray's combine would otherwise concatenate along one of
+    them and broadcast every variable over the other)."""
+    import softcell
+    from softcell import RunConfig
+    from softcell.workflows.ensemble import simulate
+
+    params = {**SHORT_RUN, "duration": [0.03, 0.05]}
+    config = RunConfig(parameters=params).updated(components={"integrator": "explicit_euler"})
+    paths = simulate(config, tmp_path / "sim", realizations=1, seed=2, progress=False)
+    ds = softcell.open_dataset(tmp_path / "sim").load()
+    assert ds["cell_x_fine"].dims == ("duration", "realization", "fine_time")
+    assert ds["membrane_x"].dims == ("duration", "realization", "time", "node")
+    assert ds.sizes["fine_time"] == 11 and ds.sizes["time"] == 8
+    short = softcell.open_dataset(paths[0]).load()
+    n = short.sizes["fine_time"]
+    np.testing.assert_array_equal(
+        ds["bot_x_fine"].isel(duration=0).values[:, :n], short["bot_x_fine"].values
+    )
+    assert np.isnan(ds["bot_x_fine"].isel(duration=0).values[:, n:]).all()
+    assert (ds["bot_phase_fine"].isel(duration=0).values[:, n:] == -1).all()

@@ -46,8 +46,9 @@ class ParameterSpec:
     kind : type
         ``float``, ``int`` or ``str``.
     minimum, maximum : float, optional
-        Bounds, in ``unit``; ``minimum_inclusive`` / ``maximum_inclusive`` say whether they
-        are allowed.
+        Bounds, in ``unit``.
+    minimum_inclusive, maximum_inclusive : bool
+        Whether each bound is itself allowed (default: minimum excluded, maximum included).
     choices : tuple of str, optional
         Allowed values of a ``str`` parameter.
     power_of_two : bool
@@ -412,8 +413,16 @@ class Parameters(Mapping[str, Value]):
     def from_attrs(
         cls, attrs: Mapping[str, Any], extra_specs: Iterable[ParameterSpec] = ()
     ) -> Parameters:
-        """Rebuild the parameters stored by :meth:`to_attrs` in a file's attributes (values
-        in the units of ``softcell_parameter_units``)."""
+        """Rebuild the parameters stored by :meth:`to_attrs` in a file's attributes.
+
+        Parameters
+        ----------
+        attrs : mapping
+            A file's global attributes (``softcell_parameters``: values in the units of
+            ``softcell_parameter_units``).
+        extra_specs : iterable of ParameterSpec
+            The specs of parameters the components added (a plugin's).
+        """
         try:
             values = json.loads(attrs["softcell_parameters"])
         except KeyError:

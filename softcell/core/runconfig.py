@@ -52,7 +52,22 @@ SECTIONS = ("parameters", "components", "run", "analysis")
 class RunConfig:
     """Parameter values (a list value is a sweep), component names by kind (a kind not named
     takes its default, ``DEFAULT_COMPONENTS``), run settings, and analysis options
-    (validated by the analysis)."""
+    (validated by the analysis).
+
+    Attributes
+    ----------
+    parameters : dict
+        Parameter values by name, in the units of ``softcell params`` (cm, s, rad, N); a list
+        of values sweeps that parameter.
+    components : dict
+        Component names by kind: ``energy_terms`` (a list), ``driving_protocol``,
+        ``friction_law``, ``integrator``, ``stopgo_detector``.
+    run : dict
+        Run settings (the ``[run]`` table of a configuration file): ``seed``,
+        ``realizations``, ...
+    analysis : dict
+        Analysis options and the detector's parameters (``softcell analyze --help``).
+    """
 
     parameters: dict[str, Any] = field(default_factory=dict)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
@@ -69,8 +84,17 @@ class RunConfig:
         components: Mapping[str, Any] = (),
         run: Mapping[str, Any] = (),
     ) -> RunConfig:
-        """A copy with some entries replaced (command-line flags over a file); parameter
-        values in the units of ``softcell params``."""
+        """A copy with some entries replaced (command-line flags over a file).
+
+        Parameters
+        ----------
+        parameters : mapping
+            Parameter values by name, in the units of ``softcell params``.
+        components : mapping
+            Component names by kind.
+        run : mapping
+            Run settings.
+        """
         return dataclasses.replace(
             self,
             parameters={**self.parameters, **dict(parameters)},
@@ -80,7 +104,13 @@ class RunConfig:
 
     def check_components(self, registry: Registry) -> None:
         """Raise :class:`ConfigError` unless every component named exists in ``registry``
-        (with a suggestion for a misspelt one) and no energy term is named twice."""
+        (with a suggestion for a misspelt one) and no energy term is named twice.
+
+        Parameters
+        ----------
+        registry : Registry
+            Where the components are looked up.
+        """
         terms = self.components.get("energy_terms", [])
         if isinstance(terms, str) or not isinstance(terms, list | tuple):
             raise ConfigError(f"energy_terms = {terms!r} is not allowed: must be a list of names")

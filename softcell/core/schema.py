@@ -487,6 +487,11 @@ def validate(ds: xr.Dataset) -> xr.Dataset:
     """Return ``ds`` unchanged if it follows the schema (which includes each variable's
     CF ``units``: cm, s, rad, or 1).
 
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A simulation or tracked Dataset.
+
     Raises
     ------
     SchemaError

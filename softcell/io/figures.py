@@ -34,7 +34,15 @@ FORMATS = ("png", "pdf")
 
 @dataclass
 class FigureSet:
-    """What :func:`make_figures` wrote: files per figure name, and figures left out (why)."""
+    """What :func:`make_figures` wrote.
+
+    Attributes
+    ----------
+    files : dict
+        The files written, by figure name (``"fig2"``: its PNG and PDF paths).
+    skipped : dict
+        The figures left out, by name, with the reason (an input missing).
+    """
 
     files: dict[str, list[Path]] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)
@@ -592,6 +600,8 @@ def make_figures(
         Analysis of free-bot runs, for S1.
     tracked : xarray.Dataset, optional
         Analysis of a tracked video, drawn as the experiments' markers in Fig. 3 and 4.
+    out : path-like
+        Folder the figures are written to (created if missing).
     formats : sequence of str
         File formats (matplotlib's names).
 

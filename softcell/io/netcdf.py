@@ -229,7 +229,13 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
 
 def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     """Read one NetCDF file fully into memory and close it; every variable keeps the CF
-    ``units`` attribute it was written with."""
+    ``units`` attribute it was written with.
+
+    Parameters
+    ----------
+    path : path-like
+        A softcell NetCDF file (simulation, tracked video or analysis).
+    """
     path = Path(path)
     if not path.is_file():
         raise no_input(path, "NetCDF file")
@@ -379,6 +385,31 @@ def _check_one_request(
                 )
 
 
+#: The time axes of a simulation (the membrane's samples, the bodies' fine record), which
+#: differ in length between the points of a sweep over durations.
+TIME_AXES = ("time", "fine_time")
+
+
+def _on_common_axes(parts: list[xr.Dataset]) -> list[xr.Dataset]:
+    """The parts reindexed onto the union of each time axis they have (NaN where a part has
+    no sample; ``bot_phase`` and ``bot_phase_fine`` -1). With two differing axes,
+    ``xarray.combine_by_coords`` would otherwise take one of them for a dimension to
+    concatenate along and broadcast every variable over the other."""
+    for axis in TIME_AXES:
+        if not all(axis in ds.coords for ds in parts):
+            continue
+        values = [np.asarray(ds[axis].values) for ds in parts]
+        if all(np.array_equal(values[0], v) for v in values[1:]):
+            continue
+        union = np.unique(np.concatenate(values))
+        fill = {n: np.int8(-1) for n in ("bot_phase", "bot_phase_fine")}
+        parts = [
+            ds.reindex({axis: union}, fill_value={n: v for n, v in fill.items() if n in ds})
+            for ds in parts
+        ]
+    return parts
+
+
 def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr.Dataset:
     """Combine per-(point, realization) Datasets into one, adding swept-parameter dims.
 
@@ -405,10 +436,12 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
     swept = [k for k in swept if k not in follows]
     _check_one_request(parts, names, values, swept)
     units = json.loads(parts[0].attrs.get("softcell_parameter_units", "{}"))
-    expanded = [
-        _with_sweep_coordinates(ds, vals, swept, follows, units)
-        for ds, vals in zip(parts, values, strict=True)
-    ]
+    expanded = _on_common_axes(
+        [
+            _with_sweep_coordinates(ds, vals, swept, follows, units)
+            for ds, vals in zip(parts, values, strict=True)
+        ]
+    )
     fill = {"bot_phase": np.int8(-1)} if "bot_phase" in parts[0] else {}
     try:
         combined = xr.combine_by_coords(

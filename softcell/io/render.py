@@ -120,6 +120,8 @@ def render(
         uneven illumination (a gradient and a vignette).
     seed : int
         Seed of the noise (0 .. 2**64 - 1).
+    progress : bool
+        Show a progress bar over the frames.
 
     Returns
     -------

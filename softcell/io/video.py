@@ -128,7 +128,9 @@ def track(
     video : path-like
         Any file OpenCV reads. Frames are read one at a time (never all in memory).
     px_per_cm : float, optional
-        Scale; or give ``arena_size`` (cm), the world width of the frame.
+        Scale (px/cm); or give ``arena_size``.
+    arena_size : float, optional
+        World width (cm) of the frame, instead of ``px_per_cm``.
     origin : (float, float)
         World position (cm) of the frame's lower-left corner (linear frame only).
     plate_size : float, optional

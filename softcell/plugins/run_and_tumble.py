@@ -24,8 +24,23 @@ from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 def alternating_schedule(
     rng: np.random.Generator, duration: float, shortest: float, longest: float
 ) -> Schedule:
-    """Run, tumble, run, ... with U[shortest, longest] durations covering [0, duration] s;
-    the datum of a tumble is its turn sign (+1 counterclockwise, -1 clockwise)."""
+    """Run, tumble, run, ... with U[shortest, longest] durations covering [0, duration];
+    the datum of a tumble is its turn sign (+1 counterclockwise, -1 clockwise).
+
+    Parameters
+    ----------
+    rng : Generator
+        The realization's random stream: the durations, then the turn signs.
+    duration : float
+        Length (s) the schedule covers.
+    shortest, longest : float
+        Bounds (s) of the uniform phase durations.
+
+    Returns
+    -------
+    Schedule
+        Start times (s), phase codes and turn signs.
+    """
     count = int(math.ceil(duration / shortest)) + 1
     lengths = rng.uniform(shortest, longest, count)
     signs = rng.choice(np.array([-1.0, 1.0]), count)
@@ -39,7 +54,23 @@ def alternating_schedule(
 @njit(**JIT)
 def run_and_tumble_drive(phase, data, pose, context, coefficients, out):
     """Run: force F0 = coefficients[0] (N) along the heading. Tumble: torque
-    data * T0 = coefficients[1] (N cm) about the center, data the turn sign."""
+    data * T0 = coefficients[1] (N cm) about the center, data the turn sign.
+
+    Parameters
+    ----------
+    phase : int
+        The phase code (0 tumble, 1 run).
+    data : float
+        The phase's schedule datum: the turn sign (+1 or -1) of a tumble.
+    pose : ndarray
+        float64[3]: the bot's x, y (cm) and heading (rad).
+    context : ndarray
+        float64[3]: l0 (cm), the bot's semi-axes (cm).
+    coefficients : ndarray
+        float64: as above, each in its unit.
+    out : ndarray
+        float64[3]: receives the force x, y (N) and the torque (N cm).
+    """
     if phase == RUN:
         out[0] = coefficients[0] * math.cos(pose[2])
         out[1] = coefficients[0] * math.sin(pose[2])
@@ -54,7 +85,23 @@ def run_and_tumble_drive(phase, data, pose, context, coefficients, out):
 def pivot_drive(phase, data, pose, context, coefficients, out):
     """As :func:`run_and_tumble_drive`, but a tumble turns the bot about a pivot offset d
     along its minor axis (coefficients: F0 (N), T0 (N cm), gamma_T, gamma_R, d (cm), and
-    1.0 for the inner side of the turn or 0.0 for a fixed side)."""
+    1.0 for the inner side of the turn or 0.0 for a fixed side).
+
+    Parameters
+    ----------
+    phase : int
+        The phase code (0 tumble, 1 run).
+    data : float
+        The phase's schedule datum: the turn sign (+1 or -1) of a tumble.
+    pose : ndarray
+        float64[3]: the bot's x, y (cm) and heading (rad).
+    context : ndarray
+        float64[3]: l0 (cm), the bot's semi-axes (cm).
+    coefficients : ndarray
+        float64: as above, each in its unit.
+    out : ndarray
+        float64[3]: receives the force x, y (N) and the torque (N cm).
+    """
     if phase == RUN:
         run_and_tumble_drive(phase, data, pose, context, coefficients, out)
         return

@@ -298,6 +298,20 @@ def check_friction_law(
     """Check a friction law on a circle about the origin under force densities spread over
     six decades (1e-7 to 1e-1 N/cm) in every direction.
 
+    Parameters
+    ----------
+    cls : FrictionLaw subclass
+        The law.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    points : int
+        Points of the circle.
+    rtol : float
+        Allowed difference of the derivative from central differences, relative to its size
+        (dimensionless).
+    seed : int
+        Seed of the force densities' directions.
+
     Raises
     ------
     AssertionError
@@ -383,6 +397,19 @@ def check_driving_protocol(
     differences with that step and with 4 times it agree to ``rtol`` (relative to the
     drive's size over a centimetre), which a drive discontinuous in the pose fails.
 
+    Parameters
+    ----------
+    cls : DrivingProtocol subclass
+        The protocol.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    duration : float
+        Length (s) of the schedule drawn.
+    rtol : float
+        Allowed difference between the two central differences (dimensionless, relative).
+    seed : int
+        Seed of the schedule and the heading.
+
     Raises
     ------
     AssertionError
@@ -466,6 +493,19 @@ def check_stopgo_detector(
     (1) / stop (0) on every sample of a stretch farther than ``margin`` samples from its
     ends (a detector may smooth or hold its label near a switch).
 
+    Parameters
+    ----------
+    cls : StopGoDetector subclass
+        The detector.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    go_speed, stop_speed : float
+        Speeds (cm/s) of the go and the stop stretches.
+    interval : float
+        Sampling interval (s).
+    margin : int
+        Samples next to a switch where any label is accepted.
+
     Raises
     ------
     AssertionError
@@ -518,6 +558,15 @@ def check_component(cls: type, values: Mapping[str, Any] | None = None, **option
     :func:`~softcell.testing.check_friction_law`,
     :func:`~softcell.testing.check_driving_protocol` or
     :func:`~softcell.testing.check_stopgo_detector`.
+
+    Parameters
+    ----------
+    cls : type
+        The component class.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    **options
+        Keywords of that check.
 
     Raises
     ------

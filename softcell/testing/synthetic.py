@@ -63,12 +63,37 @@ def stop_and_go_dataset(
     offset: Sequence[float] = (0.0, 0.0),
     turn: float | None = None,
 ) -> xr.Dataset:
-    """A simulation-schema Dataset whose cell follows :func:`stop_and_go_path`.
+    """A simulation-schema Dataset whose cell follows ``stop_and_go_path``: a stationary
+    stop-and-go path with exponential durations, each go phase in a new direction.
 
-    The membrane is a circle of ``radius`` (cm) around the cell (``nodes`` points); the bot
-    sits ``bot_offset`` (cm) from the cell, in a direction that turns at 1 rad/s, so its
-    distance to the cell is exactly ``bot_offset``. ``offset`` (cm) is added to every
-    position; ``turn`` is :func:`stop_and_go_path`'s.
+    Parameters
+    ----------
+    rng : Generator
+        The random stream (a numpy Generator) of every path.
+    times : ndarray
+        float64[T]: sample times (s), increasing (two sampling rates are allowed).
+    realizations : int
+        Paths drawn.
+    speed : float
+        Speed (cm/s) in the go phases.
+    mean_go, mean_stop : float
+        Mean durations (s) of the exponential go and stop phases.
+    radius : float
+        Radius (cm) of the membrane, a circle of ``nodes`` points around the cell.
+    bot_offset : float
+        Distance (cm) of the bot from the cell, in a direction that turns at 1 rad/s.
+    nodes : int
+        Membrane points.
+    offset : (float, float)
+        Added to every position (cm).
+    turn : float, optional
+        Angle (rad): each go phase turns by +-``turn`` from the previous one instead of
+        heading anywhere (mean cosine between consecutive go phases: cos(turn)).
+
+    Returns
+    -------
+    xarray.Dataset
+        The simulation schema; no fine record (the MSD uses the two-rate samples).
     """
     times = np.asarray(times, dtype=np.float64)
     paths = [

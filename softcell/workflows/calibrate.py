@@ -194,10 +194,36 @@ def calibrate_friction(
     the mean GC speed ``push_speed_value`` (cm/s), time-averaged over [``settle``,
     ``duration``] s.
 
-    ``config`` holds every other parameter (its ``driving_protocol`` is replaced by
-    ``constant_push``); ``push_speed_error`` (cm/s) is the measurement's standard error.
     A speed at or above the free bot's F0 / gamma_T, or below what 100 times the default
     friction gives, is refused.
+
+    Parameters
+    ----------
+    push_speed_value : float
+        The measured mean GC speed (cm/s) of a constantly pushed cell.
+    radius : float
+        The cell's radius (cm).
+    config : RunConfig, optional
+        Every other parameter (its ``driving_protocol`` is replaced by ``constant_push``).
+    push_speed_error : float
+        The measurement's standard error (cm/s).
+    realizations : int
+        Simulations per friction value tried.
+    duration, settle : float
+        Length (s) of each simulation, and the time (s) before the speed is averaged.
+    seed : int
+        Root seed of the simulations.
+    workers : int
+        Processes that run the simulations.
+    progress : bool
+        Show a progress bar.
+    log : callable, optional
+        Receives one line per friction value tried.
+
+    Returns
+    -------
+    Calibration
+        gamma_mem (N s cm-2) with its uncertainty, and the residual per radius.
     """
     from scipy.optimize import brentq
 

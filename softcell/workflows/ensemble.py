@@ -179,6 +179,16 @@ def simulate(
 
     Parameters
     ----------
+    config : RunConfig
+        The request: parameters (a list of values sweeps that parameter; every combination
+        is one parameter point), components and run settings.
+    out : path-like
+        Output folder, one NetCDF file per (point, realization); created if missing.
+    realizations : int
+        Independent realizations per parameter point, each with its own random stream.
+    seed : int
+        Root seed, 0 to 2**64 - 1: realization r of point p draws from
+        ``SeedSequence(seed, spawn_key=(p, r))``.
     workers : int
         1: run in this process; more: a local dask.distributed cluster of that many
         single-threaded worker processes.
@@ -186,6 +196,16 @@ def simulate(
         Address of a running dask.distributed scheduler (``tcp://host:8786``): one task per
         realization on its workers, which must be able to write to ``out``. Excludes
         ``workers``.
+    client : distributed.Client, optional
+        A dask.distributed client to submit the tasks to (instead of ``workers`` or
+        ``scheduler``).
+    membrane : bool
+        False simulates the free bot: no membrane, no contact (the cell's variables are NaN).
+    progress : bool
+        Show a progress bar in simulated seconds (s).
+    checkpoint_every : float
+        Wall seconds (s) between the checkpoints of a running realization (default 60 s),
+        from which an interrupted run resumes.
     overwrite : bool
         Recompute files and checkpoints in ``out`` that do not match the request, and remove
         simulation files that are no part of it (``log`` is told which).

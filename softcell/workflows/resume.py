@@ -120,9 +120,20 @@ def _checkpoint_problem(checkpoint: Path, wanted: dict[str, Any]) -> str | None:
 
 @dataclass
 class Resume:
-    """What an existing output directory holds for a request: tasks still to run, files to
-    remove first (``overwrite``), how many finished files are reused, and the files made for
-    this request but damaged on disk, with why (removed and recomputed, overwrite or not)."""
+    """What an existing output directory holds for a request.
+
+    Attributes
+    ----------
+    todo : list of Task
+        The tasks still to run.
+    remove : list of Path
+        Files to remove first (``overwrite``).
+    reused : int
+        Finished files reused as they are.
+    damaged : list of (Path, str)
+        Files made for this request but damaged on disk, with why (removed and recomputed,
+        overwrite or not).
+    """
 
     todo: list[Task]
     remove: list[Path]

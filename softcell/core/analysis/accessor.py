@@ -17,7 +17,13 @@ import xarray as xr
 
 @xr.register_dataset_accessor("softcell")
 class SoftcellAccessor:
-    """Analysis methods on a softcell Dataset (simulated or tracked); results in cm and s."""
+    """Analysis methods on a softcell Dataset (simulated or tracked); results in cm and s.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The Dataset the accessor is reached from (``ds.softcell``); xarray passes it.
+    """
 
     def __init__(self, ds: xr.Dataset) -> None:
         self._ds = ds
@@ -41,12 +47,26 @@ class SoftcellAccessor:
         return self._cache[key]
 
     def msd(self, body: str = "cell", **options: Any) -> xr.DataArray:
-        """Ensemble MSD (cm^2) of ``body`` ('cell' or 'bot') against ``lag`` (s)."""
+        """Ensemble MSD (cm^2) of a body against ``lag`` (s).
+
+        Parameters
+        ----------
+        body : str
+            'cell' (the membrane's GC) or 'bot'.
+        **options
+            Analysis options, as for :meth:`analyze`.
+        """
         return self._body(self.analyze(**options)["msd"], body)
 
     def speed(self, body: str = "cell") -> xr.DataArray:
-        """Speed (cm/s) of ``body`` per sample: forward difference within a sampling segment;
-        NaN at the last sample."""
+        """Speed (cm/s) of a body per sample: forward difference within a sampling segment;
+        NaN at the last sample.
+
+        Parameters
+        ----------
+        body : str
+            'cell' (the membrane's GC) or 'bot'.
+        """
         from softcell.core.analysis.series import speed
 
         x, y = self._ds[f"{self._check(body)}_x"], self._ds[f"{body}_y"]
@@ -77,8 +97,14 @@ class SoftcellAccessor:
         )
 
     def geometric_center(self, method: str = "mean") -> tuple[xr.DataArray, xr.DataArray]:
-        """The membrane's GC (cm): ``"mean"`` of the points (simulations) or the area
-        ``"centroid"`` of the contour (videos)."""
+        """The membrane's GC (cm), x and y.
+
+        Parameters
+        ----------
+        method : str
+            ``"mean"`` of the points (simulations) or the area ``"centroid"`` of the contour
+            (videos).
+        """
         from softcell.core.analysis.series import polygon_area_perimeter_centroid
 
         mx, my = self._ds["membrane_x"], self._ds["membrane_y"]

@@ -38,6 +38,12 @@ def kind_name(kind: str) -> str:
 class Component(ABC):
     """Base of every component.
 
+    Parameters
+    ----------
+    params : Parameters
+        The run's parameter set (values in their declared units); checked by :meth:`check`
+        and kept as ``self.params``.
+
     Class attributes
     ----------------
     kind : str
@@ -69,8 +75,13 @@ class Component(ABC):
     @classmethod
     def check(cls, params: Parameters) -> None:
         """Raise :class:`~softcell.errors.ParameterError` for a parameter set this component
-        cannot run with (beyond the per-parameter ranges; values in their declared units).
-        The default accepts everything."""
+        cannot run with (beyond the per-parameter ranges). The default accepts everything.
+
+        Parameters
+        ----------
+        params : Parameters
+            The run's parameter set, values in their declared units.
+        """
         return None
 
     def coefficients(self) -> np.ndarray:
@@ -241,7 +252,19 @@ class EnergyTerm(Component):
     ) -> np.ndarray:
         """The energy density e_n (N cm per unit xi) at the N points, for checks and diagnostics.
 
-        Arrays as in :meth:`partials_kernel`; returns float64[N].
+        Parameters
+        ----------
+        x, y : ndarray
+            float64[N]: the membrane points (cm), as in :meth:`partials_kernel`.
+        xp, yp, xpp, ypp : ndarray
+            float64[N]: their first (cm) and second (cm) derivatives along xi.
+        pose : ndarray
+            float64[3]: the bot's x, y (cm) and heading (rad).
+
+        Returns
+        -------
+        ndarray
+            float64[N]: e_n (N cm per unit xi).
         """
 
 
@@ -280,11 +303,25 @@ class DrivingProtocol(Component):
 
     @abstractmethod
     def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
-        """Draw the whole phase schedule covering [0, ``duration``] (s) from ``rng``."""
+        """Draw the whole phase schedule covering [0, ``duration``] from ``rng``.
+
+        Parameters
+        ----------
+        rng : Generator
+            The realization's random stream (a numpy Generator).
+        duration : float
+            Length (s) the schedule must cover.
+        """
 
     @abstractmethod
     def initial_heading(self, rng: np.random.Generator) -> float:
-        """Draw the bot's initial heading (rad)."""
+        """Draw the bot's initial heading (rad).
+
+        Parameters
+        ----------
+        rng : Generator
+            The realization's random stream (drawn from before the schedule).
+        """
 
     @abstractmethod
     def drive_kernel(self) -> Callable[..., None]:
@@ -368,9 +405,16 @@ class Integrator(Component):
     def build(self, model: Model) -> Stepper:
         """Compose the model's compiled kernels into a stepper.
 
-        ``model`` (:class:`softcell.plugin.Model`) is the compiled model of one parameter
-        point; the returned :class:`Stepper` advances a realization's state from one sample
-        time (s) to the next (``docs/plugins.md``, "class Integrator").
+        Parameters
+        ----------
+        model : Model
+            The compiled model of one parameter point (:class:`softcell.plugin.Model`).
+
+        Returns
+        -------
+        Stepper
+            Advances a realization's state from one sample time (s) to the next
+            (``docs/plugins.md``, "class Integrator").
         """
 
 
@@ -387,16 +431,42 @@ class Stepper(ABC):
     def start(
         self, modes: np.ndarray, pose: np.ndarray, schedule: Schedule
     ) -> dict[str, np.ndarray]:
-        """The initial state for these modes (cm), pose (cm, cm, rad) and phase schedule."""
+        """The initial state of a realization.
+
+        Parameters
+        ----------
+        modes : ndarray
+            complex128[2 Lc + 1]: the membrane's Fourier modes (cm).
+        pose : ndarray
+            float64[3]: the bot's x, y (cm) and heading (rad).
+        schedule : Schedule
+            The realization's phase schedule (times in s).
+        """
 
     @abstractmethod
     def advance(self, state: dict[str, np.ndarray], schedule: Schedule, t_end: float) -> None:
-        """Advance ``state`` in place to time ``t_end`` (s)."""
+        """Advance ``state`` in place to time ``t_end``.
+
+        Parameters
+        ----------
+        state : dict of ndarray
+            The stepper's state (see the class), changed in place.
+        schedule : Schedule
+            The realization's phase schedule (times in s).
+        t_end : float
+            Time (s) to advance to, not before the state's time.
+        """
 
     def current(self, state: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, float]:
         """The modes (cm), pose (cm, cm, rad) and time (s) the integrator has reached, for
         the diagnosis of a failed run. The default: ``state``'s ``modes``, ``pose`` and
-        ``time``; an integrator whose steps run ahead of them overrides it."""
+        ``time``; an integrator whose steps run ahead of them overrides it.
+
+        Parameters
+        ----------
+        state : dict of ndarray
+            The stepper's state.
+        """
         return state["modes"], state["pose"], float(state["time"][0])
 
     def sample(
@@ -407,7 +477,18 @@ class Stepper(ABC):
 
         The default calls :meth:`advance` once per time; an integrator whose calls cost more
         than its steps (one compiled call per sample) overrides it. Either way the result must
-        not depend on how the times are split between calls.
+        not depend on how the times are split between calls. The engine asks for the
+        membrane's sample times and the bodies' fine record (every ``sample_every``)
+        together; the built-in integrators' steps do not depend on where they are sampled.
+
+        Parameters
+        ----------
+        state : dict of ndarray
+            The stepper's state, advanced in place.
+        schedule : Schedule
+            The realization's phase schedule (times in s).
+        times : ndarray
+            float64[K]: increasing sample times (s), none before the state's time.
         """
         modes = np.empty((len(times), state["modes"].size), dtype=np.complex128)
         pose = np.empty((len(times), 3))

@@ -383,6 +383,13 @@ def registered(*plugins: object, name: str = "test_plugin") -> Iterator[Registry
 
     Each plugin is a module or object with hook implementations; the built-ins and installed
     entry points are registered as usual.
+
+    Parameters
+    ----------
+    *plugins : module or object
+        The hook implementations to add.
+    name : str
+        The name they are registered under (numbered when several), as errors show it.
     """
     extra = [(name if len(plugins) == 1 else f"{name}_{i}", p) for i, p in enumerate(plugins)]
     _override.append(Registry(extra_plugins=extra))

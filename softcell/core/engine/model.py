@@ -42,20 +42,35 @@ class Model:
     coefficients : tuple of float64 arrays
         One per term.
     drive : compiled function
-        The protocol's drive kernel; ``drive_coefficients`` its coefficients.
+        The protocol's drive kernel.
+    drive_coefficients : ndarray
+        float64: the protocol's coefficients, each in its declared unit.
     context : float64[3]
         l0 (cm), bot semi-major and semi-minor axes (cm).
     membrane_mobility : float
         2 pi / (gamma_mem l0) (cm^2 N^-1 s^-1 per unit xi): dg_k/dt = membrane_mobility f_hat_k.
     bot_mobility : float64[3]
         1/gamma_T, 1/gamma_T (cm N^-1 s^-1) and 1/gamma_R (N^-1 cm^-1 s^-1).
+    nodes : int
+        Collocation points N of the membrane.
+    cutoff : int
+        Fourier cutoff Lc: modes k = -Lc..Lc.
+    membrane : bool
+        False for a free bot (no membrane; see ``has_membrane``).
     friction : FrictionLaw
-        The membrane's friction law; ``friction_coefficients`` its coefficients. When it is
+        The membrane's friction law. When it is
         not ``linear``, an integrator evaluates the force density
         f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at M points (the smallest power of
         two >= 8 Lc, at most N: 128), applies the law's kernel there and moves the modes by the
-        velocity's modes ``|k| <= Lc``
-        (``force_scale`` = 2 pi / l0, cm^-1).
+        velocity's modes ``|k| <= Lc``.
+    friction_coefficients : ndarray
+        float64: the friction law's coefficients, each in its declared unit.
+    force_scale : float
+        2 pi / l0 (cm^-1), the factor above.
+    names : dict
+        The component names by kind, as files store them.
+    origins : dict
+        Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
     """
 
     params: Parameters

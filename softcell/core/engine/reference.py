@@ -86,6 +86,11 @@ def total_energy(model: Model, modes: np.ndarray, pose: np.ndarray) -> float:
 def explicit_decay_rate(model: Model) -> float:
     """Largest decay rate lambda_max (1/s) of the linearized explicit membrane update at the
     equilibrium circle (docs/model.md §2): the explicit Euler step is stable for dt lambda < 2.
+
+    Parameters
+    ----------
+    model : Model
+        The compiled model of one parameter point.
     """
     return float(np.max(-np.linalg.eigvals(membrane_jacobian(model)).real))
 
