@@ -952,6 +952,28 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
 WITH_COMPONENTS = ("params", "simulate")
 
 
+#: The top-level help's epilog: the workflows, an example each, where to read on.
+WORKFLOWS = """\
+workflows:
+  the paper end to end (about 5 min on 2 cores, ~430 MB; --full: the paper's
+  design, about 1 h on 2 cores with --workers 2, ~5 GB):
+    softcell reproduce --quick -o results
+  your own runs: simulate -> analyze -> figures
+    softcell simulate --radius 4,8,12 --realizations 5 --duration 120 -o run
+    softcell analyze run -o analysis.nc
+    softcell figures analysis.nc --simulations run -o figures
+  a camera's view and back: render -> track -> analyze
+    softcell render run --point radius=2 -o cell.mkv --start 15 --end 45
+    softcell track cell.mkv --px-per-cm 10 --origin=X0,Y0 -o tracked.nc  (render
+      prints the --origin to give)
+    softcell analyze tracked.nc -o tracked_analysis.nc
+
+'softcell COMMAND --help' lists a command's options. The documentation
+(docs/getting-started.md in the source, first) explains the model, the analysis
+and how to write a plugin.
+"""
+
+
 def build_parser(
     command: str | None = None, *, strict: bool = True, specs: Sequence[ParameterSpec] = ()
 ) -> argparse.ArgumentParser:
@@ -962,6 +984,8 @@ def build_parser(
         prog="softcell",
         add_help=strict,
         description="Simulate, track and analyse a soft robotic cell.",
+        epilog=WORKFLOWS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"softcell {__version__}")
     sub = parser.add_subparsers(

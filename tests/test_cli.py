@@ -164,3 +164,19 @@ def test_component_flags_only_for_the_components_in_use(tmp_path, capsys):
         except SystemExit as stop:
             assert stop.code == 0
         assert ("--atol" in capsys.readouterr().out) is shown
+
+
+def test_every_example_of_the_top_level_help_is_a_valid_command_line():
+    import shlex
+
+    from softcell.cli import WORKFLOWS, parse_arguments
+
+    examples = [
+        line.strip().split("  (")[0]
+        for line in WORKFLOWS.splitlines()
+        if line.strip().startswith("softcell ")
+    ]
+    assert len(examples) == 7
+    for example in examples:
+        args = parse_arguments(shlex.split(example.replace("X0,Y0", "1.5,-2"))[1:])
+        assert args.command == shlex.split(example)[1], example

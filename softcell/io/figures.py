@@ -34,7 +34,7 @@ FORMATS = ("png", "pdf")
 
 @dataclass
 class FigureSet:
-    """What :func:`make_figures` wrote.
+    """What :func:`softcell.make_figures` wrote.
 
     Attributes
     ----------

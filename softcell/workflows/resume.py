@@ -124,8 +124,8 @@ class Resume:
 
     Attributes
     ----------
-    todo : list of Task
-        The tasks still to run.
+    todo : list
+        The tasks (``softcell.workflows.tasks.Task``) still to run.
     remove : list of Path
         Files to remove first (``overwrite``).
     reused : int
@@ -166,7 +166,7 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
     Parameters
     ----------
     tasks : list of Task
-        The request, from :func:`softcell.workflows.ensemble.plan`.
+        The request, from ``softcell.workflows.ensemble.plan``.
     out : Path
         The output folder.
     overwrite : bool

@@ -37,7 +37,7 @@ class SoftcellAccessor:
         return validate(self._ds)
 
     def analyze(self, **options: Any) -> xr.Dataset:
-        """The full analysis Dataset (see :func:`softcell.core.analysis.analyze`); options as
+        """The full analysis Dataset (see :func:`softcell.analyze`); options as
         keyword arguments, e.g. ``discard=15, threshold=0.03``."""
         from softcell.core.analysis import analyze
 

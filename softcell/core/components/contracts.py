@@ -333,8 +333,9 @@ class DrivingProtocol(Component):
 
         ``phase``: int, the phase code; ``data``: float, the phase's schedule datum;
         ``pose``: float64[3], bot x, y (cm) and heading (rad); ``context`` and
-        ``coefficients`` as for :meth:`EnergyTerm.partials_kernel`. The kernel writes the
-        drive force x, y (N) and torque about the bot's center (N cm) into ``out[0:3]``.
+        ``coefficients`` as for :meth:`softcell.plugin.EnergyTerm.partials_kernel`. The
+        kernel writes the drive force x, y (N) and torque about the bot's center (N cm) into
+        ``out[0:3]``.
         """
 
 
