@@ -341,7 +341,7 @@ def _cmd_figures(args: argparse.Namespace) -> int:
     made = make_figures(
         read_dataset(args.analysis),
         args.output,
-        simulations=open_dataset(args.simulations) if args.simulations else None,
+        simulations=open_dataset(args.simulations, chunks={}) if args.simulations else None,
         free_bot=read_dataset(args.free_bot) if args.free_bot else None,
         tracked=read_dataset(args.tracked) if args.tracked else None,
     )

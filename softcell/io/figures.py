@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from softcell.core.schema import REGIME_NAMES
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_files
 
@@ -89,6 +90,12 @@ def _radius_colors(radii: np.ndarray):
     return [cmap(0.9 * (r - radii.min()) / span) for r in radii]
 
 
+def _radius_dashes(radii: np.ndarray) -> list[str]:
+    """Line styles alternating solid and dashed along the radii: neighbours whose colours
+    are close (the greens and yellows of R >= 10 cm) still tell apart."""
+    return ["-" if k % 2 == 0 else "--" for k in range(len(radii))]
+
+
 def _label(ax, letter: str) -> None:
     ax.set_title(f"({letter})", loc="left", fontsize=10, fontweight="bold")
 
@@ -126,7 +133,6 @@ def _trajectory(ax, simulations: xr.Dataset, radius: float, span: float, analysi
     ax.set_xlabel("x (cm)")
     ax.set_ylabel("y (cm)")
     ax.legend(fontsize=7, loc="best")
-    ax.text(0.02, 0.02, f"R = {radius:g} cm, {span:g} s", transform=ax.transAxes, fontsize=8)
 
 
 def json_option(analysis: xr.Dataset, name: str):
@@ -155,12 +161,12 @@ def _speed_series(
             ax.axvspan(tt[a], tt[min(b, tt.size - 1)], color="0.8", lw=0)
         mean = float(np.nanmean(np.asarray(point["speed"].sel(body=bodies[-1]).values)))
         ax.axhline(mean, color="red", ls="--", lw=1, label="time average")
+    ax.set_xlim(t[use][0], t[use][-1])
     ax.set_xlabel("t (s)")
     ax.set_ylabel("|v| (cm/s)")
-    ax.legend(fontsize=7, loc="upper right")
-    ax.text(
-        0.02, 0.9, f"R = {float(analysis['radius'][i]):g} cm", transform=ax.transAxes, fontsize=8
-    )
+    # Room above the data for the legend: it never covers a speed spike.
+    ax.set_ylim(0, 1.3 * np.nanmax(ax.get_ylim()[1]))
+    ax.legend(fontsize=7, loc="upper right", ncol=3)
 
 
 def _band(ax, lag: np.ndarray, msd: np.ndarray, sem: np.ndarray, color) -> None:
@@ -172,9 +178,9 @@ def _band(ax, lag: np.ndarray, msd: np.ndarray, sem: np.ndarray, color) -> None:
 def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
     radii = analysis["radius"].values
     lag = analysis["lag"].values
-    for r, color in zip(radii, _radius_colors(radii), strict=True):
+    for r, color, ls in zip(radii, _radius_colors(radii), _radius_dashes(radii), strict=True):
         m = analysis["msd"].sel(radius=r, body=body).values
-        ax.plot(lag, m, color=color, lw=1, label=f"R = {r:g} cm")
+        ax.plot(lag, m, color=color, ls=ls, lw=1, label=f"R = {r:g} cm")
         _band(ax, lag, m, analysis["msd_sem"].sel(radius=r, body=body).values, color)
     _msd_axes(ax)
     ax.legend(fontsize=6, ncol=2)
@@ -215,10 +221,33 @@ def _collapse(ax, analysis: xr.Dataset) -> str:
     return str(analysis["collapse_variant"].values[k])
 
 
+def _titled(ax, letter: str, text: str) -> None:
+    """The panel letter in bold, then ``text``."""
+    _label(ax, letter)
+    ax.set_title(text, loc="right", fontsize=8)
+
+
+def _span_text(analysis: xr.Dataset, i: int, span: float) -> str:
+    """ "R = 4 cm, coupled (background), t = 15-75 s" for point i and a span (s) from the
+    first sample the analysis kept (the end of the discarded start)."""
+    t0 = float(analysis["time"].values[0])
+    regime = REGIME_NAMES.get(_regime_at(analysis, i), "unknown")
+    return (
+        f"R = {float(analysis['radius'][i]):g} cm, {regime} (background), "
+        f"t = {t0:g}-{t0 + span:g} s"
+    )
+
+
+#: Time spans (s) of Fig. 2's trajectories (a, b) and speed series (c, d), from the end of
+#: the discarded start.
+TRAJECTORY_SPAN, SPEED_SPAN = 60.0, 10.0
+
+
 def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
-    """Fig. 2: trajectories at R = 4 and 12 cm, their speed series, MSDs, collapse."""
-    fig = _figure(13, 8)
-    axes = fig.subplots(2, 3)
+    """Fig. 2: trajectories at R = 4 and 12 cm, their speed series, MSDs, collapse; panels
+    in reading order (a, b / c, d / e, f)."""
+    fig = _figure(11, 12)
+    axes = fig.subplots(3, 2)
     for col, radius in enumerate((4.0, 12.0)):
         i = _radius_index(analysis, radius)
         ax_t, ax_v = axes[0, col], axes[1, col]
@@ -236,12 +265,14 @@ def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
             continue
         _background(ax_t, _regime_at(analysis, i))
         _background(ax_v, _regime_at(analysis, i))
-        _trajectory(ax_t, simulations, radius, 60.0, analysis)
-        _speed_series(ax_v, analysis, i, 10.0)
-    _label(axes[0, 2], "e")
-    _msd_all(axes[0, 2], analysis)
-    _label(axes[1, 2], "f")
-    _collapse(axes[1, 2], analysis)
+        _trajectory(ax_t, simulations, radius, TRAJECTORY_SPAN, analysis)
+        _speed_series(ax_v, analysis, i, SPEED_SPAN)
+        _titled(ax_t, "ab"[col], _span_text(analysis, i, TRAJECTORY_SPAN))
+        _titled(ax_v, "cd"[col], _span_text(analysis, i, SPEED_SPAN))
+    _titled(axes[2, 0], "e", "cell MSD, every R (standard error shaded)")
+    _msd_all(axes[2, 0], analysis)
+    _titled(axes[2, 1], "f", "scaling collapse, decoupled radii")
+    _collapse(axes[2, 1], analysis)
     return fig
 
 
@@ -263,15 +294,30 @@ def _pdf_panel(
             color=EXP_COLOR,
             label="tracked video",
         )
-    grid = np.linspace(0, max(6.0, float(x.max())), 200)
-    ax.plot(grid, np.exp(-grid), "k--", lw=1, label=r"$e^{-t'}$")
-    ax.set_yscale("log")
-    ax.set_xlim(0, 6)
-    ax.set_ylim(1e-3, 3)
+    # The x axis ends where the data in view do (the last bin above the axis' floor, over
+    # every R drawn).
+    drawn = [analysis[f"{kind}_pdf"].sel(radius=r, body="cell").values for r in radii]
+    filled = np.flatnonzero(np.any(np.array(drawn) >= PDF_FLOOR, axis=0))
+    end = float(x[filled[-1]]) + float(x[1] - x[0]) if filled.size else 6.0
+    grid = np.linspace(0, end, 200)
     symbol = r"\tau_\mathrm{g}" if kind == "go" else r"\tau_\mathrm{s}"
-    ax.set_xlabel(rf"${symbol}/\langle {symbol}\rangle$")
-    ax.set_ylabel(rf"$\mathcal{{P}}({symbol}/\langle {symbol}\rangle)$")
+    ax.plot(
+        grid,
+        np.exp(-grid),
+        "k--",
+        lw=1,
+        label=rf"$e^{{-t'}}$, $t' = {symbol}/\langle {symbol}\rangle$",
+    )
+    ax.set_yscale("log")
+    ax.set_xlim(0, end)
+    ax.set_ylim(PDF_FLOOR, 3)
+    ax.set_xlabel(rf"$t' = {symbol}/\langle {symbol}\rangle$")
+    ax.set_ylabel(r"$\mathcal{P}(t')$")
     ax.legend(fontsize=6, ncol=2)
+
+
+#: The lowest probability density the duration PDFs show.
+PDF_FLOOR = 1e-3
 
 
 def _tracked_radius(tracked: xr.Dataset) -> float:
@@ -289,12 +335,22 @@ def _against_radius(
     marker: str = "o",
     color: str = SIM_COLOR,
     legend: str = "simulations",
+    size: float = 6.0,
+    filled: bool = False,
 ) -> None:
     radii = analysis["radius"].values
     y = analysis[name].sel(body=body).values
     yerr = analysis[error].sel(body=body).values if error else None
     ax.errorbar(
-        radii, y, yerr=yerr, fmt=marker, color=color, mfc="none", ms=6, capsize=2, label=legend
+        radii,
+        y,
+        yerr=yerr,
+        fmt=marker,
+        color=color,
+        mfc=color if filled else "none",
+        ms=size,
+        capsize=2,
+        label=legend,
     )
     if tracked is not None:
         ax.plot(
@@ -321,11 +377,12 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     i = analysis.sizes["radius"] - 1 if i is None else i
     _background(ax_a, _regime_at(analysis, i))
     _speed_series(ax_a, analysis, i, 30.0, bodies=("cell",), shade=True)
+    ax_a.set_title(_span_text(analysis, i, 30.0) + "; stops shaded grey", loc="right", fontsize=8)
     # The paper's PDFs are of the decoupled radii; a sweep without any shows all it has.
     radii = [r for r in analysis["radius"].values if r >= 6] or list(analysis["radius"].values)
     for col, kind in enumerate(("go", "stop")):
         ax = fig.add_subplot(grid[1, col])
-        _label(ax, "b")
+        _titled(ax, "bc"[col], f"{kind} durations, R >= {min(radii):g} cm")
         _pdf_panel(ax, analysis, kind, radii, tracked)
     sub = grid[1, 2].subgridspec(2, 1)
     for row, (name, symbol) in enumerate(
@@ -333,10 +390,11 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     ):
         ax = fig.add_subplot(sub[row])
         if row == 0:
-            _label(ax, "c")
+            _titled(ax, "d", "background: the regime")
         _shade_regimes(ax, analysis)
         _against_radius(ax, analysis, name, rf"$\langle {symbol}\rangle$ (s)", tracked)
-        ax.legend(fontsize=6)
+        ax.set_ylim(bottom=0)  # a mean duration from 0: a change reads at its true size
+        ax.legend(fontsize=6, loc="lower right")
     return fig
 
 
@@ -365,12 +423,25 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
             r"$\hat D^\mathrm{sim}$",
         ),
     ):
-        _label(ax, letter)
+        _titled(ax, letter, "background: the regime")
         _shade_regimes(ax, analysis)
-        _against_radius(ax, analysis, fit, label, None, error=error, legend="fit of the MSD")
-        _against_radius(ax, analysis, theory, label, None, marker="s", color="k", legend=hat)
+        # The theory as large open squares under the fits' small filled circles: both show.
+        _against_radius(
+            ax, analysis, theory, label, None, marker="s", color="k", legend=hat, size=9
+        )
+        _against_radius(
+            ax,
+            analysis,
+            fit,
+            label,
+            None,
+            error=error,
+            legend="fit of the MSD",
+            size=4,
+            filled=True,
+        )
         if tracked is not None:
-            r = _tracked_radius(tracked)
+            r, span = _tracked_radius(tracked), _record_span(tracked)
             for name, marker in ((fit, "^"), (theory, "v")):
                 ax.plot(
                     [r],
@@ -378,11 +449,32 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
                     marker,
                     color=EXP_COLOR,
                     ms=7,
-                    label=f"tracked video, {'fit' if name == fit else 'theory'}",
+                    label=f"tracked video ({span:g} s), {'fit' if name == fit else 'theory'}",
                 )
         ax.set_yscale("log")
+        _plain_log_ticks(ax)
         ax.legend(fontsize=6)
     return fig
+
+
+def _record_span(analysis: xr.Dataset) -> float:
+    """The analysed span (s) of a record: its last kept time less its first."""
+    t = np.asarray(analysis["time"].values, dtype=float)
+    return round(float(t[-1] - t[0]))
+
+
+def _plain_log_ticks(ax, axis: str = "y") -> None:
+    """Plain numbers on a log axis (1, 2, 3, 5, 10; 0.2, 0.3, 0.5), not 6x10^-1: every power
+    of ten, and the minor ticks at 2, 3 and 5 times one."""
+    from matplotlib.ticker import FuncFormatter
+
+    def minor(v: float, _) -> str:
+        leading = v / 10 ** np.floor(np.log10(v)) if v > 0 else 0.0
+        return f"{v:g}" if np.isclose(leading, (2, 3, 5)).any() else ""
+
+    target = ax.yaxis if axis == "y" else ax.xaxis
+    target.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    target.set_minor_formatter(FuncFormatter(minor))
 
 
 def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
@@ -391,9 +483,9 @@ def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
     ax = fig.subplots()
     radii = analysis["radius"].values
     lag = analysis["lag"].values
-    for r, color in zip(radii, _radius_colors(radii), strict=True):
+    for r, color, ls in zip(radii, _radius_colors(radii), _radius_dashes(radii), strict=True):
         m = analysis["msd"].sel(radius=r, body="bot").values
-        ax.plot(lag, m, color=color, lw=0.8, label=f"in membrane, R = {r:g} cm")
+        ax.plot(lag, m, color=color, ls=ls, lw=1, label=f"in membrane, R = {r:g} cm")
         _band(ax, lag, m, analysis["msd_sem"].sel(radius=r, body="bot").values, color)
     free, free_sem = (free_bot[v].sel(body="bot") for v in ("msd", "msd_sem"))
     free = free.isel({d: 0 for d in free.dims if d != "lag"})
@@ -401,6 +493,7 @@ def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
     ax.plot(free_bot["lag"].values, free.values, "k-", lw=2, label="free bot")
     _band(ax, free_bot["lag"].values, free.values, free_sem.values, "k")
     _msd_axes(ax)
+    ax.set_title("bot MSD, free and inside membranes (standard error shaded)", fontsize=8)
     ax.legend(fontsize=6, ncol=2)
     return fig
 
@@ -421,6 +514,8 @@ def figure_s3(analysis: xr.Dataset, radius: float = 12.0):
     i = _radius_index(analysis, radius)
     i = analysis.sizes["radius"] - 1 if i is None else i
     _background(ax, _regime_at(analysis, i))
+    regime = REGIME_NAMES.get(_regime_at(analysis, i), "unknown")
+    ax.set_title(f"background: the {regime} regime", loc="right", fontsize=8)
     lag = analysis["lag"].values
     for body, color in (("bot", "0.35"), ("cell", "C3")):
         m = analysis["msd"].isel(radius=i).sel(body=body).values

@@ -5,6 +5,7 @@ rendered as Markdown and as HTML from the same blocks.
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,8 +78,13 @@ _CSS = (
 )
 
 
+def _inline(text: str) -> str:
+    """``text`` escaped for HTML, with Markdown's inline code (`x`) as <code>x</code>."""
+    return re.sub(r"`([^`]+)`", r"<code>\1</code>", html.escape(text))
+
+
 def _html_table(header: Sequence[Any], rows: Sequence[Sequence[Any]]) -> str:
-    e = html.escape
+    e = _inline
     head = "".join(f"<th>{e(str(c))}</th>" for c in header)
     body = "".join(
         "<tr>"
@@ -96,11 +102,11 @@ def _html_table(header: Sequence[Any], rows: Sequence[Sequence[Any]]) -> str:
 
 def html_page(blocks: Sequence[Block], title: str) -> str:
     """The blocks as one standalone HTML page titled ``title``."""
-    e = html.escape
+    e = _inline
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
-        f"<title>{e(title)}</title><style>{_CSS}</style></head><body>",
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
     ]
     for b in blocks:
         if b.kind in ("h1", "h2", "h3"):
@@ -115,11 +121,13 @@ def html_page(blocks: Sequence[Block], title: str) -> str:
             parts.append(_html_table(*b.content))
         elif b.kind == "figure":
             png, pdf, caption = b.content
+            a = html.escape
             parts.append(
-                f'<figure><img src="{e(png)}" alt="{e(caption)}"><figcaption>'
-                f'{e(caption)} (<a href="{e(pdf)}">PDF</a>)</figcaption></figure>'
+                f'<figure><img src="{a(png)}" alt="{a(caption)}"><figcaption>'
+                f'{e(caption)} (<a href="{a(pdf)}">PDF</a>)</figcaption></figure>'
             )
         elif b.kind == "images":
-            parts += [f'<img src="{e(path)}" alt="{e(alt)}">' for alt, path in b.content]
+            a = html.escape
+            parts += [f'<img src="{a(path)}" alt="{a(alt)}">' for alt, path in b.content]
     parts.append("</body></html>")
     return "\n".join(parts)

@@ -31,18 +31,25 @@ from softcell.workflows.findings import findings
 # ---------------------------------------------------------------------------------------------
 
 CAPTIONS = {
-    "fig2": "Fig. 2. Trajectories of the bot and the cell GC at R = 4 cm (a, coupled) and "
-    "12 cm (b), their speeds (c, d), the cell MSD for every R (e), and the best "
-    "scaling collapse of the decoupled radii (f).",
-    "fig3": "Fig. 3. (a) Cell speed at R = 12 cm, stops shaded, time average dashed; (b) PDFs "
-    "of go (left) and stop (right) durations over their mean for R >= 6 cm (the "
-    "tracked video's as triangles); (c) <tau_g> and <tau_s> against R, regimes "
-    "shaded (purple coupled, pink intermediate, green decoupled).",
-    "fig4": "Fig. 4. Theory against fits of the cell MSD: (a) ballistic velocity and v0 hat, "
-    "(b) fitted MSD slope and D hat = 2 v0_hat^2 <tau_g>.",
-    "figS1": "Fig. S1 (b). MSD of the free bot and of the bot inside membranes of every R.",
-    "figS2": "Fig. S2. Simulated PDFs of go (a) and stop (b) durations over their mean.",
-    "figS3": "Fig. S3 (b). MSD of the bot and the cell at R = 12 cm, with standard errors.",
+    "fig2": "Fig. 2. Trajectories of the bot and the cell GC at R = 4 cm (a) and 12 cm (b) "
+    "over 60 s of one realization from the end of the discarded start, their speeds over the "
+    "first 10 s of it (c, d), the cell MSD for every R with its standard error (e), and the "
+    "best scaling collapse of the decoupled radii (f). Backgrounds: the regime of the radius "
+    "(purple coupled, pink intermediate, green decoupled).",
+    "fig3": "Fig. 3. (a) Cell speed at R = 12 cm over 30 s, stops shaded grey, time average "
+    "dashed; PDFs of go (b) and stop (c) durations over their mean for R >= 6 cm (the "
+    "tracked video's as triangles); (d) <tau_g> and <tau_s> against R, regimes "
+    "shaded (purple coupled, pink intermediate, green decoupled). The paper's (b) holds both "
+    "PDFs.",
+    "fig4": "Fig. 4. Theory against fits of the cell MSD: (a) ballistic velocity (filled "
+    "circles) and v0 hat (open squares), (b) fitted MSD slope and D hat = 2 v0_hat^2 <tau_g>; "
+    "the tracked video's values (triangles) are from its analysed span, stated in the legend.",
+    "figS1": "Fig. S1 (the paper's panel b). MSD of the free bot and of the bot inside "
+    "membranes of every R, with standard errors.",
+    "figS2": "Fig. S2. Simulated PDFs of go (a) and stop (b) durations t' = tau / <tau> over "
+    "their mean, every R, against exp(-t').",
+    "figS3": "Fig. S3 (the paper's panel b). MSD of the bot and the cell at R = 12 cm, with "
+    "standard errors; the background is the radius's regime (green: decoupled).",
     "figT": "Beyond the paper. (a) The cell's velocity autocorrelation C(tau) / C(0) at three "
     "radii, measured (solid, standard error shaded) and the renewal theory's for the measured "
     "go durations (dotted: zero beyond the longest go phase); (b) the cell MSD over the renewal "
@@ -67,7 +74,7 @@ def _per_radius(analysis: xr.Dataset) -> Block:
         "D hat fit (cm2/s)",
         "D hat theory (cm2/s)",
         "go phases",
-        "IPR",
+        "shape index P/sqrt(A)",
     ]
     rows = []
     for i, r in enumerate(analysis["radius"].values):
@@ -247,6 +254,12 @@ def write_report(
         *_findings_blocks(rows),
         Block("h2", "Per radius (cell GC)"),
         _per_radius(analysis),
+        Block(
+            "p",
+            "The shape index is the membrane's perimeter over the square root of its area, "
+            "averaged over samples and realizations: 2 sqrt(pi) = 3.545 for a circle, larger "
+            "the more the membrane departs from one (the paper's IPR).",
+        ),
     ]
     if video is not None:
         blocks += _video_blocks(out, video)
