@@ -83,24 +83,6 @@ def _units_missing(doc: str) -> list[str]:
     ]
 
 
-def _check_units(app, what, name, obj, options, lines):
-    if what not in ("function", "method", "class") or name.split(".")[-1].startswith("_"):
-        return
-    import inspect
-
-    missing = _units_missing(inspect.getdoc(obj) or "")
-    if missing:
-        from sphinx.util import logging
-
-        logging.getLogger(__name__).warning(
-            "the docstring of %s states no unit for %s",
-            name,
-            ", ".join(missing),
-            type="softcell",
-            subtype="units",
-        )
-
-
 def _undescribed(obj, doc: str) -> list[str]:
     """The parameters of ``obj``'s signature that its numpydoc Parameters sections do not
     describe (``self``, ``cls``, ``*args`` and ``**kwargs`` aside)."""
@@ -131,24 +113,30 @@ def _undescribed(obj, doc: str) -> list[str]:
     ]
 
 
-def _check_parameters(app, what, name, obj, options, lines):
+def _check_docstring(app, what, name, obj, options, lines):
+    """Warn (an error with -W) for a public callable whose docstring states no unit for a
+    quantity or leaves a parameter undescribed."""
     if what not in ("function", "method", "class") or name.split(".")[-1].startswith("_"):
         return
     import inspect
 
-    missing = _undescribed(obj, inspect.getdoc(obj) or "")
-    if missing:
-        from sphinx.util import logging
+    from sphinx.util import logging
 
-        logging.getLogger(__name__).warning(
-            "the docstring of %s does not describe the parameter(s) %s",
-            name,
-            ", ".join(missing),
-            type="softcell",
-            subtype="parameters",
-        )
+    doc = inspect.getdoc(obj) or ""
+    for missing, says, subtype in (
+        (_units_missing(doc), "states no unit for", "units"),
+        (_undescribed(obj, doc), "does not describe the parameter(s)", "parameters"),
+    ):
+        if missing:
+            logging.getLogger(__name__).warning(
+                "the docstring of %s %s %s",
+                name,
+                says,
+                ", ".join(missing),
+                type="softcell",
+                subtype=subtype,
+            )
 
 
 def setup(app):
-    app.connect("autodoc-process-docstring", _check_units)
-    app.connect("autodoc-process-docstring", _check_parameters)
+    app.connect("autodoc-process-docstring", _check_docstring)
