@@ -341,8 +341,26 @@ def test_the_kernels_cache_files_live_in_the_cache_and_are_cleared(tmp_path):
     run = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
     )
-    assert Path(run.stdout.strip()) == cache / "kernels" / "kernels"
-    assert list((cache / "kernels" / "kernels").glob("runs.run_lengths-*.nbi"))
+    entry_folder = model_cache.kernel_entry(cache)
+    assert entry_folder.name.startswith("kernels-")
+    assert Path(run.stdout.strip()) == entry_folder / "kernels"
+    assert list((entry_folder / "kernels").glob("runs.run_lengths-*.nbi"))
     (entry,) = model_cache.entries(cache)
     assert entry.label == model_cache.KERNELS and not entry.stale
-    assert model_cache.clear(cache) == 1 and not (cache / "kernels").exists()
+    assert model_cache.clear(cache) == 1 and not entry_folder.exists()
+
+
+def test_the_kernels_entry_is_named_by_the_code(tmp_path, monkeypatch):
+    # numba checks a cache file against its own function's source only: a kernel calling an
+    # edited function of another file kept its old compiled code. Edited code (another
+    # digest of the compiled parts) must get another entry, and the old one is stale.
+    cache = tmp_path / "cache"
+    old = model_cache.kernel_entry(cache)
+    old.mkdir(parents=True)
+    (old / "entry.json").write_text(
+        json.dumps({**model_cache._kernel_meta(), "code": "0" * 20}), encoding="utf-8"
+    )
+    (entry,) = model_cache.entries(cache)
+    assert entry.stale
+    monkeypatch.setattr(model_cache, "_kernel_code", lambda: "f" * 20)
+    assert model_cache.kernel_entry(cache) != old

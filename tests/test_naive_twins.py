@@ -14,7 +14,7 @@ from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_model, circle_modes, force_modes, total_energy
 from softcell.core.params import Parameters
 from softcell.kernels.ellipse import signed_distance_local
-from softcell.kernels.linalg import lu_factor, lu_solve
+from softcell.kernels.linalg import lu_factor, lu_solve, lu_workspace
 from softcell.kernels.runs import run_lengths
 
 COARSE = {"cutoff": 4, "nodes": 64}
@@ -74,10 +74,16 @@ def test_lu_solve_against_gaussian_elimination(n, seed):
     rng = np.random.default_rng(seed)
     a = rng.normal(size=(n, n)) + n * np.eye(n) * rng.uniform(0, 1)
     b = rng.normal(size=n)
-    factors, pivots, x = a.copy(), np.zeros(n, np.int64), b.copy()
+    factors, pivots, x = a.copy(), lu_workspace(n), b.copy()
     assert lu_factor(factors, pivots)
     lu_solve(factors, pivots, x)
     assert np.allclose(x, naive.solve(a, b), rtol=1e-8, atol=1e-8 * np.abs(x).max())
+
+
+def test_lu_factor_reports_a_singular_matrix():
+    a = np.array([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 1.0, 1.0]])  # row 2 = 2 row 1
+    assert not lu_factor(a.copy(), lu_workspace(3))
+    assert lu_factor(np.eye(3), lu_workspace(3))
 
 
 @settings(max_examples=200)

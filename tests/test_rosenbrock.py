@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
+from softcell.kernels.linalg import lu_workspace
 from softcell.kernels.rosenbrock import (
     dense_output,
     dense_value,
@@ -29,7 +30,7 @@ def riccati(y, out, unused):
 def step(f, args, u, jac, h):
     """One step; returns (new state, error norm at atol = rtol = 1, dense rows)."""
     s = RODAS4.stages
-    mat, pivots = np.zeros((1, 1)), np.zeros(1, np.int64)
+    mat, pivots = np.zeros((1, 1)), lu_workspace(1)
     k, y, force, ynew, f0 = (np.zeros((s, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1))
     f(u, f0, args)
     assert factor_iteration_matrix(np.array([[jac]]), h, RODAS4.gamma, mat, pivots)

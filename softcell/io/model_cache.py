@@ -190,13 +190,31 @@ class DiskStore:
         _use_kernel_locator()
 
 
-#: The entry holding numba's cache files of softcell's own compiled functions, in folders
-#: named as the package's (``kernels/kernels``, ``kernels/plugins``, ...). numba checks each
-#: file against its function's source and its own version; the entry is stale when made by
-#: another softcell or numba.
+#: The label of the entry holding numba's cache files of softcell's own compiled functions,
+#: in folders named as the package's (``kernels-<code>/kernels``, ``kernels-<code>/plugins``,
+#: ...). numba checks each file against its own function's source and its own version, not
+#: against the functions it calls in other files (an edit of the ellipse distance would leave
+#: the contact's cached code as it was), so the entry is named by a digest of softcell's
+#: compiled parts: edited code gets a new entry. It is stale when made by another softcell,
+#: numba or code.
 KERNELS = "kernels"
 
 _PACKAGE = Path(__file__).resolve().parents[1]
+
+
+@functools.cache
+def _kernel_code() -> str:
+    """A digest of softcell's compiled parts (the files compiled code is made of), read once
+    per process."""
+    from softcell.core.engine.compiled import package_hash
+
+    return package_hash("softcell")[:20]
+
+
+def kernel_entry(root: Path | None = None) -> Path:
+    """The folder of numba's cache files of softcell's own compiled functions (the entry
+    labelled :data:`KERNELS` for this code) in the cache ``root`` (default: the cache)."""
+    return (cache_dir() if root is None else root) / f"{KERNELS}-{_kernel_code()}"
 
 
 def _kernel_meta() -> dict[str, str]:
@@ -207,6 +225,7 @@ def _kernel_meta() -> dict[str, str]:
         "description": "softcell's own compiled functions (numba's cache files)",
         "softcell": __version__,
         "numba": numba.__version__,
+        "code": _kernel_code(),
         "created": datetime.datetime.now().isoformat(timespec="seconds"),
     }
 
@@ -223,7 +242,7 @@ def _use_kernel_locator() -> None:
             self._py_file = py_file
             self._lineno = py_func.__code__.co_firstlineno
             folder = Path(py_file).resolve().parent.relative_to(_PACKAGE)
-            self._cache_path = str(cache_dir() / KERNELS / folder)
+            self._cache_path = str(kernel_entry() / folder)
 
         def get_cache_path(self):
             return self._cache_path
@@ -232,7 +251,7 @@ def _use_kernel_locator() -> None:
         def from_function(cls, py_func, py_file):
             if not Path(py_file).resolve().is_relative_to(_PACKAGE):
                 return None
-            entry = cache_dir() / KERNELS
+            entry = kernel_entry()
             try:
                 if _marker(entry) is None:
                     entry.mkdir(parents=True, exist_ok=True)
@@ -316,7 +335,8 @@ def _stale(meta: dict[str, str], environment: str) -> bool:
     import numba
 
     if meta["label"] == KERNELS:
-        return (meta.get("softcell"), meta.get("numba")) != (__version__, numba.__version__)
+        made = (meta.get("softcell"), meta.get("numba"), meta.get("code"))
+        return made != (__version__, numba.__version__, _kernel_code())
     return meta.get("environment") != environment
 
 

@@ -35,9 +35,15 @@ def _root(u, v, a, b):
         qx = (a * a) * u / d
         qy = b * math.sqrt(max(1.0 - (qx / a) ** 2, 1e-300))
         s = min(max(b2 * v / qy, lo), hi)
+    elif lo < b2 < hi:
+        # Start from t = 0, the root of a point on the ellipse: the points that matter
+        # (within the contact's reach) are near it.
+        s = b2
     for _ in range(ELLIPSE_ITERATIONS):
-        ex = a * u / (s + d)
-        ey = b * v / s
+        rx = 1.0 / (s + d)
+        ry = 1.0 / s
+        ex = a * u * rx
+        ey = b * v * ry
         f = ex * ex + ey * ey - 1.0
         if f > 0.0:
             lo = s
@@ -45,7 +51,7 @@ def _root(u, v, a, b):
             hi = s
         else:
             return s
-        df = -2.0 * (ex * ex / (s + d) + ey * ey / s)
+        df = -2.0 * (ex * ex * rx + ey * ey * ry)
         s_new = s - f / df
         if not lo < s_new < hi:  # Newton left the bracket: bisect
             s_new = 0.5 * (lo + hi)

@@ -101,15 +101,70 @@ def active_points(hww, hwp, active):
     flat_w = hww.reshape(n * 36)
     flat_p = hwp.reshape(n * 18)
     for i in range(n):
-        total = 0.0
+        nonzero = False
         for a in range(36):
-            total += abs(flat_w[36 * i + a])
-        for a in range(18):
-            total += abs(flat_p[18 * i + a])
-        if total != 0.0:
+            if flat_w[36 * i + a] != 0.0:
+                nonzero = True
+                break
+        if not nonzero:
+            for a in range(18):
+                if flat_p[18 * i + a] != 0.0:
+                    nonzero = True
+                    break
+        if nonzero:
             active[n_active] = i
             n_active += 1
     return n_active
+
+
+#: c_alpha(k) = k^alpha i^FORCE_TURNS[alpha] (-1, i k, k^2), and
+#: (i k)^beta = k^beta i^ORDER_TURNS[beta] (1, i k, -k^2).
+FORCE_TURNS = (2, 1, 0)
+ORDER_TURNS = (0, 1, 2)
+
+
+@njit(**JIT)
+def _turn(z, p):
+    """z i^p, exactly (a quarter turn swaps and negates parts)."""
+    p %= 4
+    if p == 0:
+        return z
+    if p == 1:
+        return complex(-z.imag, z.real)
+    if p == 2:
+        return -z
+    return complex(z.imag, -z.real)
+
+
+@njit(**JIT)
+def _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b):
+    """Add block (alpha, beta) (and, for alpha != beta, its transpose) to cal_A, cal_B:
+    cal_A_ij += c_al(k_i) (i k_j)^be A_hat(k_i - k_j), cal_B_ij += c_al(k_i) conj((i k_j)^be)
+    B_hat(k_i + k_j), with each factor c (i k)^o a real number times a fixed power of i, so
+    the powers of i turn the transforms once per block and the entries cost real products."""
+    size = a_hat.size
+    ea, eb = FORCE_TURNS[al], FORCE_TURNS[be]
+    fa, fb = ORDER_TURNS[al], ORDER_TURNS[be]
+    for q in range(size):
+        rotated[0, q] = _turn(a_hat[q], ea + fb)
+        rotated[1, q] = _turn(b_hat[q], ea - fb)
+        rotated[2, q] = _turn(a_hat[size - 1 - q].conjugate(), eb + fa)
+        rotated[3, q] = _turn(b_hat[q], eb - fa)
+    m_count = cal_a.shape[0]
+    for i in range(m_count):
+        ra = magnitudes[al, i]
+        rb = magnitudes[be, i]
+        for j in range(m_count):
+            wa = ra * magnitudes[be, j]
+            q = i - j + 2 * lc
+            va = wa * rotated[0, q]
+            vb = wa * rotated[1, i + j]
+            if be != al:
+                wb = rb * magnitudes[al, j]
+                va += wb * rotated[2, q]
+                vb += wb * rotated[3, i + j]
+            cal_a[i, j] += va
+            cal_b[i, j] += vb
 
 
 # A compiled inner loop: exempt from the complexity limit of the rest of the code.
@@ -136,6 +191,8 @@ def assemble_jacobian(  # noqa: C901
     cal_b,
     factors,
     orders,
+    magnitudes,
+    rotated,
     jac,
 ):
     """Add to ``jac`` (float64[n_u, n_u], 1/s) the energy terms' part of the Jacobian, from
@@ -148,7 +205,8 @@ def assemble_jacobian(  # noqa: C901
     int64[N];
     ``buf_a, buf_b, scratch`` complex128[N]; ``a_hat, b_hat`` complex128[4 Lc + 1]; ``g_hat``
     complex128[2 Lc + 1]; ``cal_a, cal_b`` complex128[2 Lc + 1, 2 Lc + 1]; ``factors, orders``
-    complex128[3, 2 Lc + 1].
+    complex128[3, 2 Lc + 1]; ``magnitudes`` float64[3, 2 Lc + 1] (k^order); ``rotated``
+    complex128[4, 4 Lc + 1].
     """
     n = hww.shape[0]
     m_count = 2 * lc + 1
@@ -156,6 +214,7 @@ def assemble_jacobian(  # noqa: C901
         for i in range(m_count):
             factors[o, i] = _force_factor(o, i - lc)
             orders[o, i] = _order_factor(o, i - lc)
+            magnitudes[o, i] = float(i - lc) ** o
     base = 2 * m_count
     weight = 2.0 * math.pi / n
     cal_a[:, :] = 0.0
@@ -189,22 +248,7 @@ def assemble_jacobian(  # noqa: C901
                 buf_b[i] = complex(0.5 * (hxx - hyy), 0.5 * (hyx + hxy))
             _transform(buf_a, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, a_hat)
             _transform(buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, b_hat)
-            for i in range(m_count):
-                ca = factors[al, i]
-                cb = factors[be, i]
-                for j in range(m_count):
-                    # (i k_j)^beta = orders[beta, j]
-                    pa = orders[al, j]
-                    pb = orders[be, j]
-                    ah = a_hat[i - j + 2 * lc]
-                    bh = b_hat[i + j]
-                    va = ca * pb * ah
-                    vb = ca * pb.conjugate() * bh
-                    if be != al:
-                        va += cb * pa * a_hat[j - i + 2 * lc].conjugate()
-                        vb += cb * pa.conjugate() * bh
-                    cal_a[i, j] += va
-                    cal_b[i, j] += vb
+            _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b)
     for i in range(m_count):
         for j in range(m_count):
             s = cal_a[i, j] + cal_b[i, j]

@@ -54,11 +54,12 @@ def evaluate(modes, spec, z, zp, zpp):
 
 
 @njit(**JIT)
-def assemble(q0, q1, q2, has_q0, spec, fhat):
+def assemble(q0, q1, q2, has_q0, has_q1, has_q2, spec, fhat):
     """Force modes f_hat_k = -Q0_hat + i k Q1_hat + k^2 Q2_hat for |k| <= Lc (docs/model.md §3).
 
     ``q0, q1, q2``: complex128[N], the summed partials P0, P1, P2 as x + i y (N).
-    ``has_q0``: False skips the Q0 transform (no bot contact: Q0 is zero).
+    ``has_q0, has_q1, has_q2``: False skips that transform (the partials of that order are
+    zero everywhere: no bot contact for Q0, only the contact for Q1 and Q2).
     ``fhat``: complex128[2 Lc + 1] output (N), with f_hat_k = N^-1 sum_n f_n e^{-i k xi_n}.
     """
     n = q0.size
@@ -70,14 +71,16 @@ def assemble(q0, q1, q2, has_q0, spec, fhat):
         c2c(q0, spec, axes, True, inv, 1)
         for j in range(fhat.size):
             fhat[j] -= spec[(j - lc) % n]
-    c2c(q1, spec, axes, True, inv, 1)
-    for j in range(fhat.size):
-        k = j - lc
-        fhat[j] += 1j * k * spec[k % n]
-    c2c(q2, spec, axes, True, inv, 1)
-    for j in range(fhat.size):
-        k = j - lc
-        fhat[j] += (k * k) * spec[k % n]
+    if has_q1:
+        c2c(q1, spec, axes, True, inv, 1)
+        for j in range(fhat.size):
+            k = j - lc
+            fhat[j] += 1j * k * spec[k % n]
+    if has_q2:
+        c2c(q2, spec, axes, True, inv, 1)
+        for j in range(fhat.size):
+            k = j - lc
+            fhat[j] += (k * k) * spec[k % n]
 
 
 def resample(modes: np.ndarray, points: int) -> np.ndarray:

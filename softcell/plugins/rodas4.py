@@ -35,6 +35,7 @@ from softcell.core.engine.compiled import compile_module
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
+from softcell.kernels.linalg import lu_workspace
 from softcell.plugins.rodas4_method import (  # shared with the template rodas4_loop.py
     ERR_ACCEPTED,
     H_NEXT,
@@ -101,6 +102,8 @@ Workspace = namedtuple(
         "cal_b",
         "factors",
         "orders",
+        "magnitudes",
+        "rotated",
         "jac",
         "mat",
         "pivots",
@@ -170,9 +173,11 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         cal_b=np.zeros((m, m), c),
         factors=np.zeros((3, m), c),
         orders=np.zeros((3, m), c),
+        magnitudes=np.zeros((3, m)),
+        rotated=np.zeros((4, 4 * lc + 1), c),
         jac=np.zeros((nu, nu)),
         mat=np.zeros((nu, nu)),
-        pivots=np.zeros(nu, np.int64),
+        pivots=lu_workspace(nu),
         k=np.zeros((6, nu)),
         f0=np.zeros(nu),
         y=np.zeros(nu),

@@ -81,7 +81,7 @@ def _source_files(top: str) -> list[Path]:
     return files
 
 
-def _package_hash(top: str) -> str:
+def package_hash(top: str) -> str:
     """sha256 of :func:`_source_files` of ``top``, names and contents (re-read whenever a
     file's size or time changes, so a plugin edited and reloaded in a session gets a new
     key)."""
@@ -102,7 +102,7 @@ def _hash_files(stamps: tuple[tuple[str, int, int], ...]) -> str:
 @functools.cache
 def _distribution_version(top: str) -> str:
     """The version of ``top``: its distribution's of the same name, else its ``__version__``
-    (the code itself is keyed by :func:`_package_hash`)."""
+    (the code itself is keyed by :func:`package_hash`)."""
     try:
         return importlib.metadata.version(top)
     except importlib.metadata.PackageNotFoundError:
@@ -130,7 +130,7 @@ def _fingerprint(name: str, value: object) -> str:
                 f"{func.__module__}.{qualname} is not defined in an importable module"
             )
         return (
-            f"{name}={func.__module__}:{qualname}:{_package_hash(top)}:{_distribution_version(top)}"
+            f"{name}={func.__module__}:{qualname}:{package_hash(top)}:{_distribution_version(top)}"
         )
     raise TypeError(
         f"cannot bind {name!r} = {value!r} into a compiled module: only "
@@ -159,7 +159,7 @@ def _imported_packages(source: str) -> list[str]:
 
 def _environment() -> str:
     return (
-        f"softcell={__version__}:{_package_hash('softcell')};numba={numba.__version__};"
+        f"softcell={__version__}:{package_hash('softcell')};numba={numba.__version__};"
         f"numpy={np.__version__};python={sys.version};{platform.machine()}"
     )
 
@@ -181,7 +181,7 @@ def entry_key(source: str, bindings: Mapping[str, object]) -> str:
     parts = [_environment(), source]
     parts += [_fingerprint(n, bindings[n]) for n in sorted(bindings)]
     parts += [
-        f"import {top}:{_package_hash(top)}:{_distribution_version(top)}"
+        f"import {top}:{package_hash(top)}:{_distribution_version(top)}"
         for top in _imported_packages(source)
     ]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()

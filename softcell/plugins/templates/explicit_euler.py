@@ -109,7 +109,7 @@ def segment(
                 q2[i] = parts[4, i] + 1j * parts[5, i]
                 if parts[0, i] != 0.0 or parts[1, i] != 0.0:
                     has_q0 = True
-            assemble(q0, q1, q2, has_q0, spec, fhat)
+            assemble(q0, q1, q2, has_q0, True, True, spec, fhat)
             if LAW:
                 friction_velocity(modes, fhat, law.vhat, law)
                 for j in range(modes.size):

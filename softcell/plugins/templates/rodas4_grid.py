@@ -26,7 +26,9 @@ BOUND = (
 @njit(**JIT_FLAGS)
 def forces(modes, pose, order, context, coefficients, g):
     """g.fhat (N) and g.dpose of the group at these modes; curve derivatives above
-    ``order`` are left at zero."""
+    ``order`` are left at zero, and so are the partials with respect to them (the energy
+    term contract: a term's partials beyond its ``derivative_order`` are zero), which are
+    neither reset nor scanned."""
     n = g.w.shape[1]
     lc = (modes.size - 1) // 2
     for o in range(order + 1):
@@ -35,7 +37,8 @@ def forces(modes, pose, order, context, coefficients, g):
         for i in range(n):
             g.w[2 * o, i] = g.curve[o, i].real
             g.w[2 * o + 1, i] = g.curve[o, i].imag
-    g.parts[:, :] = 0.0
+    rows = 2 * order + 2
+    g.parts[:rows, :] = 0.0
     g.dpose[:] = 0.0
     p = g.parts
     partials(
@@ -58,25 +61,30 @@ def forces(modes, pose, order, context, coefficients, g):
     )
     count = 0
     n_active = 0
-    higher = False
+    first = False
+    second = False
     for i in range(n):
         zero = True
         if p[0, i] != 0.0 or p[1, i] != 0.0:
             g.index[count] = i
             count += 1
             zero = False
-        if p[2, i] != 0.0 or p[3, i] != 0.0 or p[4, i] != 0.0 or p[5, i] != 0.0:
-            higher = True
+        if order >= 1 and (p[2, i] != 0.0 or p[3, i] != 0.0):
+            first = True
+            zero = False
+        if order == 2 and (p[4, i] != 0.0 or p[5, i] != 0.0):
+            second = True
             zero = False
         if not zero:
             g.active[n_active] = i
             n_active += 1
     g.n_active[0] = n_active
-    if higher or count > SPARSE_POINTS:
+    if first or second or count > SPARSE_POINTS:
+        # FFTs, skipping the orders whose partials vanish everywhere.
         for i in range(n):
             for o in range(3):
                 g.q[o, i] = complex(p[2 * o, i], p[2 * o + 1, i])
-        assemble(g.q[0], g.q[1], g.q[2], count > 0, g.spec, g.fhat)
+        assemble(g.q[0], g.q[1], g.q[2], count > 0, first, second, g.spec, g.fhat)
     else:
         # Only a few points carry a force (the contact): direct sums, no FFT.
         # The twiddle index (k i) mod N of each point is stepped by i from k to k + 1.
@@ -140,5 +148,7 @@ def grid_jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
         ws.cal_b,
         ws.factors,
         ws.orders,
+        ws.magnitudes,
+        ws.rotated,
         ws.jac,
     )
