@@ -31,6 +31,7 @@ from pathlib import Path
 ENSEMBLE = {"radius": [6.0, 9.0, 12.0], "duration": 240.0}
 ENSEMBLE_REALIZATIONS = 4
 CORES = os.cpu_count() or 1
+FULL_TARGET = 0.75  # h: the paper's full design to the end in 45 min on 2 cores
 MEASURED = Path(__file__).resolve().parents[1] / "docs" / "results" / "full" / "timing.json"
 
 
@@ -174,7 +175,7 @@ def measured_rows() -> list[dict[str, object]]:
                 "benchmark": "reproduce --full, measured",
                 "value": float("nan"),
                 "unit": "h",
-                "target": 1.0,
+                "target": FULL_TARGET,
                 "note": f"not run yet: see {MEASURED.parent}/README.md",
             }
         ]
@@ -184,7 +185,7 @@ def measured_rows() -> list[dict[str, object]]:
             "benchmark": "reproduce --full, measured",
             "value": timing["total"] / 3600,
             "unit": "h",
-            "target": 1.0,
+            "target": FULL_TARGET,
             "note": f"softcell {timing['version']}, {timing['cores']} cores, {timing['date']}",
         }
     ]

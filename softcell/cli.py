@@ -22,7 +22,7 @@ from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
 from softcell.core.interrupt import exit_status, received, stop_signals
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
-from softcell.core.runconfig import RunConfig
+from softcell.core.runconfig import RunConfig, with_obstacle_term
 from softcell.errors import CacheWarning, PluginWarning, SchemaError, SoftcellError
 from softcell.io.config_file import load_config
 
@@ -118,7 +118,35 @@ def _flag_values(args: argparse.Namespace) -> dict[str, Any]:
 
 def _config(args: argparse.Namespace) -> RunConfig:
     base = load_config(args.config) if getattr(args, "config", None) else RunConfig()
-    return base.updated(parameters=_flag_values(args))
+    values = _flag_values(args)
+    placed = _obstacle_flags(args)
+    if placed:
+        if "obstacles" in values:
+            raise SoftcellError("--obstacles and --obstacle / --wall both place obstacles: use one")
+        values["obstacles"] = placed
+    return base.updated(parameters=values)
+
+
+def _obstacle_flags(args: argparse.Namespace) -> str:
+    """The parameter ``obstacles`` from ``--obstacle X,Y,RADIUS`` and
+    ``--wall X0,Y0,X1,Y1,WIDTH`` (cm), or "" when neither is given."""
+    from softcell.core.obstacles import FIELDS, obstacle_text
+
+    tables = []
+    for flag, kind in (("obstacle", "post"), ("wall", "wall")):
+        for raw in getattr(args, flag, None) or ():
+            words = [w.strip() for w in raw.split(",")]
+            fields = FIELDS[kind]
+            try:
+                if len(words) != len(fields):
+                    raise ValueError
+                tables.append(dict(zip(fields, (float(w) for w in words), strict=True)))
+            except ValueError:
+                raise SoftcellError(
+                    f"--{flag} {raw} is not allowed: must be "
+                    f"{','.join(f.upper() for f in fields)} (numbers in cm)"
+                ) from None
+    return obstacle_text(tables) if tables else ""
 
 
 def _cmd_plugins(args: argparse.Namespace) -> int:
@@ -147,20 +175,21 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 
 
 def _cmd_params(args: argparse.Namespace) -> int:
-    from softcell.core.components.registry import check_in_use, default_registry
+    from softcell.core.components.registry import check_in_use, check_point, default_registry
     from softcell.core.limits import check_run
 
     registry = default_registry()
-    config = _config(args).updated(components=_component_flags(args))
+    config = with_obstacle_term(_config(args).updated(components=_component_flags(args)))
     config.check_components(registry)
     check_in_use(config.parameters, registry, config.components)
     points = expand_sweep(
         config.parameters, list(registry.parameter_specs(config.components).values())
     )
-    integrator = registry.get("integrator", config.components["integrator"])
     for _, params in points:
         check_run(params)
-        integrator.check(params)  # the checks simulate makes, so params accepts no less
+        check_point(
+            params, registry, config.components
+        )  # the checks simulate makes, so params accepts no less
     _, first = points[0]
     swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
     width = max(len(n) for n in first)
@@ -177,7 +206,7 @@ def _cmd_params(args: argparse.Namespace) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from softcell.workflows.ensemble import simulate
 
-    config = _config(args).updated(components=_component_flags(args))
+    config = with_obstacle_term(_config(args).updated(components=_component_flags(args)))
     run = config.run
     realizations = (
         args.realizations if args.realizations is not None else run.get("realizations", 1)
@@ -614,6 +643,19 @@ def _add_component_choice(p: argparse.ArgumentParser) -> None:
         "paper's; coulomb adds a static threshold)",
     )
     p.add_argument("--energy-terms", help="comma-separated energy terms")
+    p.add_argument(
+        "--obstacle",
+        action="append",
+        metavar="X,Y,RADIUS",
+        help="a fixed circular post (cm; repeatable); the energy term obstacles joins the terms",
+    )
+    p.add_argument(
+        "--wall",
+        action="append",
+        metavar="X0,Y0,X1,Y1,WIDTH",
+        help="a fixed straight wall of thickness WIDTH from (X0, Y0) to (X1, Y1) (cm; "
+        "repeatable; write --wall=-10,... when the first number is negative)",
+    )
 
 
 def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
@@ -1025,7 +1067,11 @@ def parse_arguments(argv: Sequence[str]) -> argparse.Namespace:
 def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
     """The components a command line chooses: its TOML file's, then its flags'."""
     base = load_config(args.config) if getattr(args, "config", None) else RunConfig()
-    return {**base.components, **_component_flags(args)}
+    chosen = {**base.components, **_component_flags(args)}
+    placed = any(getattr(args, f, None) for f in ("obstacle", "wall", "param_obstacles"))
+    if placed and "obstacles" not in chosen["energy_terms"]:
+        chosen["energy_terms"] = [*chosen["energy_terms"], "obstacles"]
+    return chosen
 
 
 def _component_flags(args: argparse.Namespace) -> dict[str, Any]:

@@ -6,7 +6,7 @@ import pytest
 from softcell.cli import main
 from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model, fd_hessian, initial_state
+from softcell.core.engine import build_integrator, build_model, initial_state
 from softcell.core.engine.compose import compose_bot
 from softcell.core.engine.reference import _curve
 from softcell.core.params import Parameters
@@ -15,7 +15,7 @@ from softcell.errors import ParameterError
 from softcell.io.netcdf import read_dataset
 from softcell.plugins.arena import arena_bot
 from softcell.plugins.rodas4 import pack
-from softcell.testing.compare import rodas4_jacobians
+from softcell.testing.compare import rodas4_jacobians, term_hessians
 
 TERMS = ["bending", "tension", "contact", "arena"]
 
@@ -54,24 +54,8 @@ def test_second_derivatives_match_differences():
     w = np.zeros((6, n))
     w[0], w[1] = 0.01 + 4.99 * np.cos(xi), -0.005 + 4.99 * np.sin(xi)
     coefficients = np.ascontiguousarray(term.coefficients())
-    analytic = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
     pose = np.array([0.0, 0.0, 0.3])
-    term.hessian_kernel()(*w, pose, model.context, coefficients, *analytic)
-    fallback = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
-    fd_hessian(term.partials_kernel())(
-        w.copy(),
-        pose,
-        model.context,
-        coefficients,
-        np.array([1e-7] * 9),
-        np.zeros(n),
-        np.zeros((6, n)),
-        np.zeros((6, n)),
-        np.zeros(3),
-        np.zeros(3),
-        np.zeros(3),
-        *fallback,
-    )
+    analytic, fallback = term_hessians(term, w, pose, model.context, [1e-7] * 9)
     assert np.count_nonzero(analytic[0]) > 8
     assert np.abs(analytic[0] - fallback[0]).max() <= 1e-6 * np.abs(fallback[0]).max()
     # the bot's walls: at a corner, turned, within reach of two walls

@@ -13,7 +13,6 @@ from softcell.core.engine import (
     build_model,
     circle_modes,
     equilibrium_radius,
-    fd_hessian,
     force_modes,
     initial_state,
 )
@@ -22,7 +21,7 @@ from softcell.core.realization import realization_rng
 from softcell.plugins.bending import bending_partials
 from softcell.plugins.rodas4 import pack
 from softcell.testing import registered
-from softcell.testing.compare import rodas4_jacobians, rodas4_rhs
+from softcell.testing.compare import rodas4_jacobians, rodas4_rhs, term_hessians
 
 TERMS = ["bending", "tension", "contact"]
 REFERENCE = Path(__file__).parent / "regression" / "integrator_reference.npz"
@@ -64,25 +63,8 @@ def test_analytic_second_derivatives_match_the_fallback(name):
 
     z, zp, zpp = _curve(modes, n)
     w = np.ascontiguousarray(np.stack([z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag]))
-    coefficients = np.ascontiguousarray(term.coefficients())
-    analytic = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
-    term.hessian_kernel()(*w, pose, model.context, coefficients, *analytic)
-    fallback = [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]
-    steps = np.array([1e-7 * 4.0] * 8 + [1e-7])
-    fd_hessian(term.partials_kernel())(
-        w.copy(),
-        pose,
-        model.context,
-        coefficients,
-        steps,
-        np.zeros(n),
-        np.zeros((6, n)),
-        np.zeros((6, n)),
-        np.zeros(3),
-        np.zeros(3),
-        np.zeros(3),
-        *fallback,
-    )
+    steps = [1e-7 * 4.0] * 8 + [1e-7]
+    analytic, fallback = term_hessians(term, w, pose, model.context, steps)
     assert np.abs(analytic[0]).max() > 0
     for a, f in zip(analytic, fallback, strict=True):
         assert np.abs(a - f).max() <= 1e-6 * np.abs(f).max() + 1e-300

@@ -21,6 +21,17 @@ A configuration file has up to three tables::
     detector = "threshold"  # detector's parameters (softcell analyze --help lists them)
     threshold = 0.05
 
+    [[obstacles]]           # a fixed post (cm); the energy term "obstacles" joins the terms
+    x = 12
+    y = 0
+    radius = 2
+
+    [[obstacles]]           # a straight wall from (x0, y0) to (x1, y1) (cm)
+    x0 = -20
+    y0 = -8
+    x1 = 20
+    y1 = -8
+
 Values are in the units of the parameter table (``softcell params`` prints it).
 """
 
@@ -31,8 +42,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from softcell.core.obstacles import obstacle_text
 from softcell.core.params import suggest
-from softcell.errors import ConfigError
+from softcell.errors import ConfigError, ParameterError
 
 if TYPE_CHECKING:
     from softcell.core.components.registry import Registry
@@ -45,7 +57,7 @@ DEFAULT_COMPONENTS: dict[str, Any] = {
     "stopgo_detector": "threshold",
 }
 RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}
-SECTIONS = ("parameters", "components", "run", "analysis")
+SECTIONS = ("parameters", "components", "run", "analysis", "obstacles")
 
 
 @dataclass(frozen=True)
@@ -143,7 +155,7 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
                 f"{source}: unknown table [{section}]{suggest(section, SECTIONS)}; "
                 f"tables: {', '.join(SECTIONS)}"
             )
-        if not isinstance(value, dict):
+        if section != "obstacles" and not isinstance(value, dict):
             raise ConfigError(f"{source}: {section} must be a table, [{section}]")
     components = dict(data.get("components", {}))
     for kind in components:
@@ -157,9 +169,44 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
             raise ConfigError(f"{source}: unknown [run] key {key!r}{suggest(key, RUN_KEYS)}")
         if not isinstance(value, RUN_KEYS[key]) or isinstance(value, bool):
             raise ConfigError(f"{source}: [run] {key} = {value!r} must be an integer")
-    return RunConfig(
-        parameters=dict(data.get("parameters", {})),
-        components={**DEFAULT_COMPONENTS, **components},
-        run=run,
-        analysis=dict(data.get("analysis", {})),
+    parameters = dict(data.get("parameters", {}))
+    if "obstacles" in data:
+        parameters["obstacles"] = _obstacle_tables(data, source)
+    return with_obstacle_term(
+        RunConfig(
+            parameters=parameters,
+            components={**DEFAULT_COMPONENTS, **components},
+            run=run,
+            analysis=dict(data.get("analysis", {})),
+        )
     )
+
+
+def _obstacle_tables(data: dict[str, Any], source: object) -> str:
+    """The parameter ``obstacles`` from a document's ``[[obstacles]]`` tables."""
+    tables = data["obstacles"]
+    if not (isinstance(tables, list) and all(isinstance(v, dict) for v in tables)):
+        raise ConfigError(
+            f"{source}: obstacles must be tables, [[obstacles]] (x, y, radius for a post; "
+            "x0, y0, x1, y1, width for a wall; cm)"
+        )
+    if "obstacles" in data.get("parameters", {}):
+        raise ConfigError(
+            f"{source}: obstacles are given twice, as [[obstacles]] tables and as the "
+            "parameter obstacles: keep one"
+        )
+    try:
+        return obstacle_text(tables)
+    except ParameterError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+
+
+def with_obstacle_term(config: RunConfig) -> RunConfig:
+    """``config`` with the energy term ``obstacles`` among its terms when it places
+    obstacles (the parameter ``obstacles`` is set and not empty) and the term is not named."""
+    terms = config.components.get("energy_terms")
+    if not config.parameters.get("obstacles") or not isinstance(terms, list | tuple):
+        return config
+    if "obstacles" in terms:
+        return config
+    return config.updated(components={"energy_terms": [*terms, "obstacles"]})

@@ -404,16 +404,16 @@ class Rodas4(Integrator):
     parameters = (
         ParameterSpec(
             "atol",
-            1e-6,
+            3e-6,
             "cm",
             "absolute error tolerance of rodas4 per step "
             "(cm for positions and modes, rad for the heading)",
             minimum=0.0,
         ),
         ParameterSpec(
-            "rtol", 1e-6, "1", "relative error tolerance of rodas4 per step", minimum=0.0
+            "rtol", 3e-6, "1", "relative error tolerance of rodas4 per step", minimum=0.0
         ),
-        ParameterSpec("max_step", 0.05, "s", "largest step of rodas4", minimum=0.0),
+        ParameterSpec("max_step", 0.2, "s", "largest step of rodas4", minimum=0.0),
         ParameterSpec("first_step", 1e-4, "s", "first trial step of rodas4", minimum=0.0),
         ParameterSpec(
             "smooth_nodes",

@@ -17,6 +17,7 @@ from softcell.core.engine import (
     Record,
     build_integrator,
     build_model,
+    fd_hessian,
     force_modes,
 )
 from softcell.core.params import Parameters
@@ -165,3 +166,28 @@ __all__ = [
     "rodas4_rhs",
     "rodas4_jacobians",
 ]
+
+
+def term_hessians(term, w: np.ndarray, pose: np.ndarray, context: np.ndarray, steps):
+    """An energy term's second derivatives at the curve ``w`` (float64[6, N]: x, y and their
+    first and second derivatives in xi, cm) and the bot's ``pose``, twice: from its
+    ``hessian_kernel`` and by central differences of its partials with ``steps``
+    (float64[9]: the step of each of the six curve quantities and the three pose
+    coordinates). Returns (analytic, differences), each [hww (N, 6, 6), hwp (N, 6, 3),
+    hpp (3, 3)]."""
+    n = w.shape[1]
+    coefficients = np.ascontiguousarray(term.coefficients())
+    blank = lambda: [np.zeros((n, 6, 6)), np.zeros((n, 6, 3)), np.zeros((3, 3))]  # noqa: E731
+    analytic, differences = blank(), blank()
+    term.hessian_kernel()(*w, pose, context, coefficients, *analytic)
+    work = [np.zeros(n), np.zeros((6, n)), np.zeros((6, n)), *(np.zeros(3) for _ in range(3))]
+    fd_hessian(term.partials_kernel())(
+        w.copy(),
+        pose,
+        context,
+        coefficients,
+        np.asarray(steps, dtype=np.float64),
+        *work,
+        *differences,
+    )
+    return analytic, differences

@@ -19,7 +19,12 @@ from pathlib import Path
 from typing import Any
 
 from softcell.config import CHECKPOINT_EVERY
-from softcell.core.components.registry import Registry, check_in_use, default_registry
+from softcell.core.components.registry import (
+    Registry,
+    check_in_use,
+    check_point,
+    default_registry,
+)
 from softcell.core.limits import check_run, check_seed
 from softcell.core.params import expand_sweep
 from softcell.core.runconfig import RunConfig
@@ -75,10 +80,9 @@ def plan(
     points = expand_sweep(
         config.parameters, list(registry.parameter_specs(config.components).values())
     )
-    integrator = registry.get("integrator", config.components["integrator"])
     for _, params in points:
         check_run(params)
-        integrator.check(params)
+        check_point(params, registry, config.components)
     _check_total(points, realizations, out)
     swept = tuple(
         dict.fromkeys(

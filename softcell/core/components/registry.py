@@ -40,6 +40,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.plugins.tension",
     "softcell.plugins.contact",
     "softcell.plugins.arena",
+    "softcell.plugins.obstacles",
     "softcell.plugins.run_and_tumble",
     "softcell.plugins.constant_push",
     "softcell.plugins.friction_laws",
@@ -353,6 +354,23 @@ def check_in_use(
                     f"parameter {name!r} belongs to {owner}, which this run does not use; "
                     "choose that component or drop the value"
                 )
+
+
+def check_point(params: Any, registry: Registry, components: Mapping[str, Any]) -> None:
+    """Run the ``check`` of every component in ``components`` (the integrator, the energy
+    terms, the driving protocol, the friction law) on one parameter point ``params``, so that
+    a value a component refuses stops a run before anything is compiled or computed.
+
+    Raises
+    ------
+    ParameterError
+        The first refusal, naming the parameter, its value and what is allowed.
+    """
+    names = [("integrator", components["integrator"])]
+    names += [("energy_term", n) for n in components.get("energy_terms", [])]
+    names += [(k, components[k]) for k in ("driving_protocol", "friction_law") if k in components]
+    for kind, name in names:
+        registry.get(kind, name).check(params)
 
 
 def _normal(name: str) -> str:
