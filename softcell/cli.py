@@ -22,7 +22,7 @@ from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
 from softcell.core.interrupt import exit_status, received, stop_signals
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
-from softcell.core.runconfig import RunConfig, with_obstacle_term
+from softcell.core.runconfig import RunConfig, terms_with_obstacles, with_obstacle_term
 from softcell.errors import CacheWarning, PluginWarning, SchemaError, SoftcellError
 from softcell.io.config_file import load_config
 
@@ -187,9 +187,8 @@ def _cmd_params(args: argparse.Namespace) -> int:
     )
     for _, params in points:
         check_run(params)
-        check_point(
-            params, registry, config.components
-        )  # the checks simulate makes, so params accepts no less
+        # the checks simulate makes, so params accepts no less
+        check_point(params, registry, config.components)
     _, first = points[0]
     swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
     width = max(len(n) for n in first)
@@ -1068,9 +1067,8 @@ def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
     """The components a command line chooses: its TOML file's, then its flags'."""
     base = load_config(args.config) if getattr(args, "config", None) else RunConfig()
     chosen = {**base.components, **_component_flags(args)}
-    placed = any(getattr(args, f, None) for f in ("obstacle", "wall", "param_obstacles"))
-    if placed and "obstacles" not in chosen["energy_terms"]:
-        chosen["energy_terms"] = [*chosen["energy_terms"], "obstacles"]
+    if any(getattr(args, f, None) for f in ("obstacle", "wall", "param_obstacles")):
+        chosen["energy_terms"] = terms_with_obstacles(chosen["energy_terms"])
     return chosen
 
 

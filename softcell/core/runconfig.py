@@ -207,6 +207,9 @@ def with_obstacle_term(config: RunConfig) -> RunConfig:
     terms = config.components.get("energy_terms")
     if not config.parameters.get("obstacles") or not isinstance(terms, list | tuple):
         return config
-    if "obstacles" in terms:
-        return config
-    return config.updated(components={"energy_terms": [*terms, "obstacles"]})
+    return config.updated(components={"energy_terms": terms_with_obstacles(terms)})
+
+
+def terms_with_obstacles(terms: list[str] | tuple[str, ...]) -> list[str]:
+    """The energy terms ``terms`` with ``obstacles`` added last unless already named."""
+    return list(terms) if "obstacles" in terms else [*terms, "obstacles"]
