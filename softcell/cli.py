@@ -21,8 +21,14 @@ from typing import Any, NoReturn
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
 from softcell.core.interrupt import exit_status, received, stop_signals
+from softcell.core.obstacles import check_clear_of_start
 from softcell.core.params import MODEL_PARAMETERS, ParameterSpec, expand_sweep, suggest
-from softcell.core.runconfig import RunConfig, terms_with_obstacles, with_obstacle_term
+from softcell.core.runconfig import (
+    RunConfig,
+    terms_with_obstacles,
+    with_assembly_terms,
+    with_obstacle_term,
+)
 from softcell.errors import CacheWarning, PluginWarning, SchemaError, SoftcellError
 from softcell.io.config_file import load_config
 
@@ -124,7 +130,17 @@ def _config(args: argparse.Namespace) -> RunConfig:
         if "obstacles" in values:
             raise SoftcellError("--obstacles and --obstacle / --wall both place obstacles: use one")
         values["obstacles"] = placed
-    return base.updated(parameters=values)
+    return base.updated(parameters=values, assembly=_assembly_flags(args))
+
+
+def _assembly_flags(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``[assembly]`` settings given as flags (--cells, --box, --boundary, --placement,
+    --gap)."""
+    return {
+        key: getattr(args, f"assembly_{key}")
+        for key in ("cells", "box", "boundary", "placement", "gap")
+        if getattr(args, f"assembly_{key}", None) is not None
+    }
 
 
 def _obstacle_flags(args: argparse.Namespace) -> str:
@@ -180,6 +196,7 @@ def _cmd_params(args: argparse.Namespace) -> int:
 
     registry = default_registry()
     config = with_obstacle_term(_config(args).updated(components=_component_flags(args)))
+    config = with_assembly_terms(config)
     config.check_components(registry)
     check_in_use(config.parameters, registry, config.components)
     points = expand_sweep(
@@ -189,6 +206,8 @@ def _cmd_params(args: argparse.Namespace) -> int:
         check_run(params)
         # the checks simulate makes, so params accepts no less
         check_point(params, registry, config.components)
+        if not config.assembly:
+            check_clear_of_start(params)
     _, first = points[0]
     swept = {k: v for k, v in config.parameters.items() if isinstance(v, list)}
     width = max(len(n) for n in first)
@@ -273,6 +292,11 @@ def _cmd_render(args: argparse.Namespace) -> int:
         validate(ds)
     except SchemaError as exc:
         raise SoftcellError(f"{args.input} cannot be rendered: {exc}") from None
+    if "cell" in ds.dims:
+        raise SoftcellError(
+            f"{args.input} is an assembly of {ds.sizes['cell']} cells: render films one cell "
+            "(the camera's view of the paper's experiments)"
+        )
     try:
         info = render(
             ds,
@@ -657,6 +681,41 @@ def _add_component_choice(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_assembly_flags(p: argparse.ArgumentParser) -> None:
+    group = p.add_argument_group(
+        "assembly", "many cells, each with its own bot, repelling each other's membranes"
+    )
+    group.add_argument(
+        "--cells", dest="assembly_cells", type=int, metavar="M", help="number of cells"
+    )
+    group.add_argument(
+        "--box",
+        dest="assembly_box",
+        type=float,
+        metavar="L",
+        help="side of the square box centred on the origin (cm); none: the open plane",
+    )
+    group.add_argument(
+        "--boundary",
+        dest="assembly_boundary",
+        choices=("periodic", "walls", "open"),
+        help="the box's boundary (default periodic with --box, open without)",
+    )
+    group.add_argument(
+        "--placement",
+        dest="assembly_placement",
+        choices=("lattice", "random"),
+        help="starting places: a square lattice (default) or at random",
+    )
+    group.add_argument(
+        "--gap",
+        dest="assembly_gap",
+        type=float,
+        metavar="CM",
+        help="smallest starting gap between rings, walls and obstacles (cm, default 1)",
+    )
+
+
 def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("config", nargs="?", type=Path, help="TOML configuration file")
     _add_component_choice(p)
@@ -679,6 +738,7 @@ def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     _add_cluster_flags(p, "local worker processes (default 1; more: a local dask cluster)")
     _add_component_choice(p)
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
+    _add_assembly_flags(p)
     p.add_argument(
         "--overwrite",
         action="store_true",
@@ -1069,6 +1129,9 @@ def _chosen_components(args: argparse.Namespace) -> dict[str, Any]:
     chosen = {**base.components, **_component_flags(args)}
     if any(getattr(args, f, None) for f in ("obstacle", "wall", "param_obstacles")):
         chosen["energy_terms"] = terms_with_obstacles(chosen["energy_terms"])
+    boundary = getattr(args, "assembly_boundary", None) or base.assembly.get("boundary")
+    if boundary == "walls" and "arena" not in chosen["energy_terms"]:
+        chosen["energy_terms"] = [*chosen["energy_terms"], "arena"]
     return chosen
 
 

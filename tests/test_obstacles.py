@@ -10,7 +10,7 @@ from softcell.cli import main
 from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.components.registry import default_registry
 from softcell.core.engine import build_integrator, build_model, initial_state
-from softcell.core.obstacles import obstacle_text, surface_distances
+from softcell.core.obstacles import check_clear_of_start, obstacle_text, surface_distances
 from softcell.core.params import Parameters
 from softcell.core.realization import realization_rng
 from softcell.core.runconfig import config_from_mapping
@@ -164,7 +164,6 @@ def test_a_configuration_file_places_obstacles_and_adds_their_term():
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("post 4.5 0 1", r"must keep clear of the cell at the start: its surface is 3.5 cm"),
         ("post 8 0 0", r"post radius > 0"),
         ("wall 5 5 5 5 1", r"two distinct ends"),
         ("wall 5 5 9 5 0", r"wall width > 0"),
@@ -178,6 +177,14 @@ def test_a_configuration_file_places_obstacles_and_adds_their_term():
 def test_a_bad_obstacle_is_refused_naming_it(text, message):
     with pytest.raises(ParameterError, match=message):
         _term(text)
+
+
+def test_an_obstacle_on_a_single_cell_start_is_refused_naming_it():
+    check_clear_of_start(_params(obstacles="post 8 0 1"))  # 7 cm away: clear
+    with pytest.raises(
+        ParameterError, match=r"keep clear of the cell at the start: its surface is 3.5 cm"
+    ):
+        check_clear_of_start(_params(obstacles="post 4.5 0 1"))
 
 
 def test_the_command_line_places_obstacles_refuses_bad_ones_and_stores_them(tmp_path, capsys):

@@ -79,6 +79,95 @@ class Domain:
         return (p + self.box / 2) % self.box - self.box / 2
 
 
+#: The keys of an ``[assembly]`` table (and the ``--cells``, ``--box``, ``--boundary``,
+#: ``--placement``, ``--gap`` flags), with their types and units.
+ASSEMBLY_KEYS: dict[str, tuple[type, str]] = {
+    "cells": (int, "1"),
+    "box": (float, "cm"),
+    "boundary": (str, "1"),
+    "placement": (str, "1"),
+    "gap": (float, "cm"),
+}
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Many cells in one plane: how many, in what domain, placed how.
+
+    Attributes
+    ----------
+    cells : int
+        Number of cells M (each a membrane with its own bot, drive and random stream).
+    boundary : str
+        ``open``, ``walls`` or ``periodic`` (default: ``periodic`` with a box, ``open``
+        without).
+    box : float or None
+        Side L of the square box (cm); None for the open plane.
+    placement : str
+        ``lattice`` or ``random`` (see :func:`place_cells`).
+    gap : float
+        Smallest starting gap between rings, and between a ring and a wall or an obstacle
+        (cm).
+    """
+
+    cells: int = 1
+    boundary: str = "open"
+    box: float | None = None
+    placement: str = "lattice"
+    gap: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check_request(self.cells, 1.0, self.gap, self.placement)
+        Domain(self.boundary, self.box)
+
+    @property
+    def domain(self) -> Domain:
+        return Domain(self.boundary, self.box)
+
+    def as_dict(self) -> dict[str, object]:
+        """The settings as a file stores them (JSON-ready; ``box`` None in the open plane)."""
+        return {
+            "cells": self.cells,
+            "boundary": self.boundary,
+            "box": self.box,
+            "placement": self.placement,
+            "gap": self.gap,
+        }
+
+    @classmethod
+    def from_mapping(cls, data: dict[str, object], source: object = "[assembly]") -> Assembly:
+        """An assembly from an ``[assembly]`` table or the flags' values.
+
+        Raises
+        ------
+        ConfigError
+            For an unknown key (with a suggestion) or a value of the wrong type.
+        ParameterError
+            For a value out of range (naming it, with its unit).
+        """
+        from softcell.core.params import suggest
+        from softcell.errors import ConfigError
+
+        values = {}
+        for key, value in data.items():
+            if key not in ASSEMBLY_KEYS:
+                raise ConfigError(
+                    f"{source}: unknown key {key!r}{suggest(key, ASSEMBLY_KEYS)}; "
+                    f"keys: {', '.join(ASSEMBLY_KEYS)}"
+                )
+            kind, unit = ASSEMBLY_KEYS[key]
+            ok = isinstance(value, kind) and not isinstance(value, bool)
+            if kind is float and isinstance(value, int) and not isinstance(value, bool):
+                value, ok = float(value), True
+            if not ok:
+                what = {int: "an integer", float: "a number", str: "a name"}[kind]
+                unit_text = "" if unit == "1" else f" ({unit})"
+                raise ConfigError(f"{source}: {key} = {value!r} must be {what}{unit_text}")
+            values[key] = value
+        values.setdefault("boundary", "open" if values.get("box") is None else "periodic")
+        return cls(**values)
+
+
 def place_cells(
     count: int,
     radius: float,

@@ -156,3 +156,21 @@ def check_seed(seed: object) -> int:
             f"2**64 - 1 = {MAX_SEED} (it is stored in every file)"
         )
     return seed
+
+
+def check_assembly_memory(params, cells: int, memory: int | None = None) -> None:
+    """Raise :class:`ParameterError` naming ``cells`` unless one realization of an assembly
+    of ``cells`` cells of ``params`` fits in memory (each cell's record is one cell's)."""
+    memory = machine_memory() if memory is None else memory
+    budget = MEMORY_FRACTION * memory
+    one = sum(realization_bytes(params).values())
+    if one * cells <= budget:
+        return
+    raise ParameterError(
+        "cells",
+        cells,
+        f"must be <= {int(budget // one)}: one realization would need "
+        f"{human_bytes(one * cells)} of memory, more than {MEMORY_FRACTION:.0%} of "
+        f"{human_bytes(memory)}",
+        "1",
+    )

@@ -112,3 +112,32 @@ def surface_distances(x: np.ndarray, y: np.ndarray, text: str) -> np.ndarray:
         t = np.clip(((x - v[0]) * ex + (y - v[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0)
         out.append(np.hypot(x - v[0] - t * ex, y - v[1] - t * ey) - 0.5 * v[4])
     return np.array(out).reshape(len(out), *x.shape)
+
+
+def check_clear_of_start(params) -> None:
+    """Refuse obstacles within a single cell's reach at the start: the membrane starts as a
+    circle of radius ``radius`` about the origin and feels an obstacle up to
+    CONTACT_CUTOFF_LENGTHS contact lengths beyond it.
+
+    Raises
+    ------
+    ParameterError
+        Naming the obstacle, its distance from the origin and the ring's reach (cm).
+    """
+    from softcell.config import CONTACT_CUTOFF_LENGTHS
+
+    text = str(params.get("obstacles", "") or "")
+    if not text:
+        return
+    reach = float(params.radius) + CONTACT_CUTOFF_LENGTHS * float(params.contact_length)
+    distances = surface_distances(np.zeros(1), np.zeros(1), text)[:, 0]
+    for (kind, numbers), rho in zip(parse_obstacles(text), distances, strict=True):
+        if rho <= reach:
+            raise ParameterError(
+                "obstacles",
+                f"'{kind} {' '.join(f'{v:g}' for v in numbers)}'",
+                f"must keep clear of the cell at the start: its surface is {rho:g} cm "
+                f"from the origin, the ring reaches {reach:g} cm (radius plus "
+                f"{CONTACT_CUTOFF_LENGTHS:g} contact lengths)",
+                "cm",
+            )

@@ -32,6 +32,12 @@ A configuration file has up to three tables::
     x1 = 20
     y1 = -8
 
+    [assembly]              # many cells: how many, in what box (cm), placed how
+    cells = 16
+    box = 60
+    boundary = "periodic"   # or "walls"; no box: the open plane
+    placement = "lattice"   # or "random", at least gap (cm) apart
+
 Values are in the units of the parameter table (``softcell params`` prints it).
 """
 
@@ -57,7 +63,7 @@ DEFAULT_COMPONENTS: dict[str, Any] = {
     "stopgo_detector": "threshold",
 }
 RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}
-SECTIONS = ("parameters", "components", "run", "analysis", "obstacles")
+SECTIONS = ("parameters", "components", "run", "analysis", "obstacles", "assembly")
 
 
 @dataclass(frozen=True)
@@ -79,12 +85,17 @@ class RunConfig:
         ``realizations``, ...
     analysis : dict
         Analysis options and the detector's parameters (``softcell analyze --help``).
+    assembly : dict
+        Many cells (the ``[assembly]`` table: ``cells``, ``box`` in cm, ``boundary``,
+        ``placement``, ``gap`` in cm; see :class:`~softcell.core.assembly.Assembly`); empty
+        for one cell.
     """
 
     parameters: dict[str, Any] = field(default_factory=dict)
     components: dict[str, Any] = field(default_factory=lambda: dict(DEFAULT_COMPONENTS))
     run: dict[str, Any] = field(default_factory=dict)
     analysis: dict[str, Any] = field(default_factory=dict)
+    assembly: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # A kind not named takes its default: RunConfig(components={"integrator": "x"}).
@@ -95,6 +106,7 @@ class RunConfig:
         parameters: Mapping[str, Any] = (),
         components: Mapping[str, Any] = (),
         run: Mapping[str, Any] = (),
+        assembly: Mapping[str, Any] = (),
     ) -> RunConfig:
         """A copy with some entries replaced (command-line flags over a file).
 
@@ -106,12 +118,15 @@ class RunConfig:
             Component names by kind.
         run : mapping
             Run settings.
+        assembly : mapping
+            Settings of an assembly of cells (``cells``, ``box``, ...).
         """
         return dataclasses.replace(
             self,
             parameters={**self.parameters, **dict(parameters)},
             components={**self.components, **dict(components)},
             run={**self.run, **dict(run)},
+            assembly={**self.assembly, **dict(assembly)},
         )
 
     def check_components(self, registry: Registry) -> None:
@@ -178,6 +193,7 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
             components={**DEFAULT_COMPONENTS, **components},
             run=run,
             analysis=dict(data.get("analysis", {})),
+            assembly=dict(data.get("assembly", {})),
         )
     )
 
@@ -213,3 +229,37 @@ def with_obstacle_term(config: RunConfig) -> RunConfig:
 def terms_with_obstacles(terms: list[str] | tuple[str, ...]) -> list[str]:
     """The energy terms ``terms`` with ``obstacles`` added last unless already named."""
     return list(terms) if "obstacles" in terms else [*terms, "obstacles"]
+
+
+def assembly_of(config: RunConfig):
+    """The :class:`~softcell.core.assembly.Assembly` ``config`` asks for, None for one cell
+    (no ``[assembly]`` settings)."""
+    from softcell.core.assembly import Assembly
+
+    return Assembly.from_mapping(dict(config.assembly)) if config.assembly else None
+
+
+def with_assembly_terms(config: RunConfig) -> RunConfig:
+    """``config`` with the arena's walls as the box of an assembly with boundary ``walls``:
+    the energy term ``arena`` joins the terms and its side ``arena_side`` is the box's.
+
+    Raises
+    ------
+    ConfigError
+        When ``arena_side`` is set to another side than the box's.
+    """
+    assembly = assembly_of(config)
+    if assembly is None or assembly.boundary != "walls":
+        return config
+    side = config.parameters.get("arena_side")
+    if side is not None and float(side) != assembly.box:
+        raise ConfigError(
+            f"arena_side = {side} cm and the assembly's box = {assembly.box:g} cm differ: "
+            "a walled box is the arena; set one of them"
+        )
+    terms = list(config.components.get("energy_terms", []))
+    if "arena" not in terms:
+        terms.append("arena")
+    return config.updated(
+        parameters={"arena_side": assembly.box}, components={"energy_terms": terms}
+    )

@@ -63,6 +63,31 @@ COORDINATES: dict[str, VariableSpec] = {
     )
 }
 
+#: The coordinate of an assembly's cells: a file of many cells has the variables of one
+#: with ``cell`` after its time dim ((realization, time, cell, node) for the membrane).
+CELL_COORDINATE = VariableSpec("cell", ("cell",), "i", "1", "cell index in the assembly")
+
+#: An assembly's domain: the side of its square box (NaN for the open plane), with its
+#: boundary (open, walls, periodic) as an attribute; and where each cell started.
+DOMAIN_VARIABLES: dict[str, VariableSpec] = {
+    v.name: v
+    for v in (
+        VariableSpec("domain_box", (), "f", "cm", "side of the square box (NaN: the open plane)"),
+        VariableSpec("cell_start_x", ("cell",), "f", "cm", "cell starting center x coordinate"),
+        VariableSpec("cell_start_y", ("cell",), "f", "cm", "cell starting center y coordinate"),
+    )
+}
+
+
+def with_cell(dims: tuple[str, ...]) -> tuple[str, ...]:
+    """``dims`` of a one-cell variable as an assembly stores it: ``cell`` after the time
+    dim (``time`` or ``fine_time``); dims without a time dim are unchanged."""
+    for i, d in enumerate(dims):
+        if d in ("time", "fine_time"):
+            return (*dims[: i + 1], "cell", *dims[i + 1 :])
+    return dims
+
+
 VARIABLES: dict[str, VariableSpec] = {
     v.name: v
     for v in (
@@ -420,6 +445,9 @@ def problems(ds: xr.Dataset) -> list[str]:
     for spec in (*COORDINATES.values(), *VARIABLES.values()):
         found.extend(_variable_problems(ds, spec))
     found.extend(_fine_problems(ds))
+    if "cell" in ds.dims:
+        for spec in (CELL_COORDINATE, *DOMAIN_VARIABLES.values()):
+            found.extend(_variable_problems(ds, spec))
     if "time" in ds.coords and ds.sizes.get("time", 0) > 1:
         if not bool(np.all(np.diff(ds["time"].values) > 0)):
             found.append("time: values must increase strictly")
@@ -464,9 +492,12 @@ def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
         return [f"{spec.name}: missing"]
     var = ds[spec.name]
     found = []
-    # Sweeps add leading dims (one per swept parameter); the schema's dims must come last.
-    if var.dims[len(var.dims) - len(spec.dims) :] != spec.dims:
-        found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(spec.dims)})")
+    # Sweeps add leading dims (one per swept parameter); the schema's dims must come last
+    # (with ``cell`` after the time dim in an assembly's file).
+    per_cell = spec.name in VARIABLES or spec.name in FINE_VARIABLES
+    expected = with_cell(spec.dims) if per_cell and "cell" in ds.dims else spec.dims
+    if var.dims[len(var.dims) - len(expected) :] != expected:
+        found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(expected)})")
     if var.dtype.kind not in (spec.kind, "u" if spec.kind == "i" else spec.kind):
         found.append(
             f"{spec.name}: dtype {var.dtype}, expected "
@@ -534,6 +565,7 @@ def simulation_dataset(
     extra_attrs: Mapping[str, Any] | None = None,
     scalar_coords: Sequence[str] = ("radius",),
     fine: Mapping[str, np.ndarray] | None = None,
+    domain: Mapping[str, Any] | None = None,
 ) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
@@ -564,6 +596,10 @@ def simulation_dataset(
         The bodies' fine record: ``fine_time`` (float64[F], s) and every variable of
         :data:`FINE_VARIABLES` ([R, F]: ``cell_x_fine`` ... in cm, ``bot_angle_fine`` in rad,
         ``bot_phase_fine`` int8).
+    domain : mapping, optional
+        For an assembly of cells: ``box`` (cm, NaN for the open plane), ``boundary`` (str)
+        and ``start_x``, ``start_y`` (float64[C], cm); every variable then has a ``cell`` dim
+        after its time dim ([R, T, C, node] for the membrane, [R, T, C] for the bodies).
     """
     if cell_x is None:
         cell_x = membrane_x.mean(axis=-1)
@@ -579,8 +615,9 @@ def simulation_dataset(
         "bot_angle": bot_angle,
         "bot_phase": np.asarray(bot_phase, dtype=np.int8),
     }
+    dims = with_cell if domain is not None else (lambda d: d)
     data_vars = {
-        name: (VARIABLES[name].dims, np.asarray(arr), VARIABLES[name].cf_attrs())
+        name: (dims(VARIABLES[name].dims), np.asarray(arr), VARIABLES[name].cf_attrs())
         for name, arr in arrays.items()
     }
     n_nodes = np.shape(membrane_x)[-1]
@@ -603,7 +640,21 @@ def simulation_dataset(
             values = np.asarray(fine[name])
             if spec.name == "bot_phase_fine":
                 values = values.astype(np.int8)
-            data_vars[name] = (spec.dims, values, spec.cf_attrs())
+            data_vars[name] = (dims(spec.dims), values, spec.cf_attrs())
+    if domain is not None:
+        cells = len(domain["start_x"])
+        coords["cell"] = ("cell", np.arange(cells, dtype=np.int64), CELL_COORDINATE.cf_attrs())
+        for name, value, extra in (
+            ("domain_box", domain["box"], {"boundary": domain["boundary"]}),
+            ("cell_start_x", domain["start_x"], {}),
+            ("cell_start_y", domain["start_y"], {}),
+        ):
+            spec = DOMAIN_VARIABLES[name]
+            data_vars[name] = (
+                spec.dims,
+                np.asarray(value, np.float64),
+                {**spec.cf_attrs(), **extra},
+            )
     for name in dict.fromkeys(scalar_coords):
         spec = parameters.specs[name]
         coords[name] = ((), parameters[name], {"units": spec.unit, "long_name": spec.long_name})

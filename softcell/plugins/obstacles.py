@@ -165,8 +165,10 @@ class Obstacles(EnergyTerm):
 
     @classmethod
     def check(cls, params) -> None:
-        """Refuse a malformed list, or an obstacle within the ring's reach at the start (the
-        membrane starts as a circle of the ring's radius about the origin)."""
+        """Refuse a malformed list, or a post or wall too thin to hold a pushed membrane
+        (where the cells start is checked by the run that places them:
+        :func:`softcell.core.obstacles.check_clear_of_start` for one cell, the placement
+        for an assembly)."""
         items = parse_obstacles(str(params.obstacles))
         thinnest = MIN_THICKNESS_LENGTHS * float(params.contact_length)
         for kind, numbers in items:
@@ -178,19 +180,6 @@ class Obstacles(EnergyTerm):
                     f"'{kind} {' '.join(f'{v:g}' for v in numbers)}'",
                     f"must have a {what} >= {thinnest:g} cm ({MIN_THICKNESS_LENGTHS:g} "
                     "contact lengths): a thinner obstacle lets a pushed membrane through",
-                    "cm",
-                )
-        reach = float(params.radius) + CONTACT_CUTOFF_LENGTHS * float(params.contact_length)
-        coefficients = _coefficients(str(params.obstacles), 1.0, 1.0)
-        for i, (kind, numbers) in enumerate(items):
-            _, _, _, rho, _ = _nearest(0.0, 0.0, coefficients, i)
-            if rho <= reach:
-                raise ParameterError(
-                    "obstacles",
-                    f"'{kind} {' '.join(f'{v:g}' for v in numbers)}'",
-                    f"must keep clear of the cell at the start: its surface is {rho:g} cm "
-                    f"from the origin, the ring reaches {reach:g} cm (radius plus "
-                    f"{CONTACT_CUTOFF_LENGTHS:g} contact lengths)",
                     "cm",
                 )
 

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import (
@@ -38,12 +39,14 @@ from softcell.errors import ParameterError
 from softcell.kernels.linalg import lu_workspace
 from softcell.plugins.rodas4_method import (  # shared with the template rodas4_loop.py
     ERR_ACCEPTED,
+    H_LAST,
     H_NEXT,
     JACOBIANS,
     OK,
     REJECTED,
     RHS_CALLS,
     RODAS4,
+    SINGULAR,
     STEP_UNDERFLOW,
     STEPS,
     Coefficients,
@@ -283,6 +286,99 @@ def compiled_loop(model: Model) -> tuple:
     return loop.rhs, loop.jacobian, loop.integrate
 
 
+def compiled_group(model: Model):
+    """The group loop of ``templates/rodas4_group.py`` (``advance_group``) for the model's
+    components: several cells and their membrane-membrane contact, stepped together."""
+    if model.nonlinear_friction:
+        raise ParameterError(
+            "friction_law",
+            model.friction.name,
+            "must be viscous for an assembly of cells (the pair forces move the membrane "
+            "by its linear mobility)",
+            "1",
+        )
+    rhs, jacobian, _ = compiled_loop(model)
+    module = compile_module(
+        "rodas4-group",
+        template(__package__ + ".templates", "rodas4_group.py"),
+        {"rhs": rhs, "jacobian": jacobian},
+        f"{_names(model.terms)}; {model.protocol.name}; assembly",
+    )
+    return module.advance_group
+
+
+class GroupWork(NamedTuple):
+    """Scratch arrays of the group loop for G cells of nu unknowns each."""
+
+    jac: np.ndarray
+    mat: np.ndarray
+    pivots: np.ndarray
+    k: np.ndarray
+    f0: np.ndarray
+    y: np.ndarray
+    ynew: np.ndarray
+    force: np.ndarray
+    scratch: np.ndarray
+    phases: np.ndarray
+    data: np.ndarray
+
+
+class PairWork(NamedTuple):
+    """What the pair forces read: the members' points ``z`` (complex128[G, N], cm), scratch
+    ``modes`` and ``spec``, the image ``shifts`` (float64[G, G, 2], cm), the ``contacts``
+    table, ``constants`` = [(l0 / 2 pi) A (N cm), lambda (cm), cut-off (cm), membrane
+    mobility, difference step (cm)] and ``twiddle`` = exp(-2 pi i n / N)."""
+
+    z: np.ndarray
+    modes: np.ndarray
+    spec: np.ndarray
+    shifts: np.ndarray
+    contacts: np.ndarray
+    constants: np.ndarray
+    twiddle: np.ndarray
+
+
+def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
+    """The group loop's scratch arrays for ``cells`` cells of ``model``."""
+    m = 2 * model.cutoff + 1
+    nu = 2 * m + 3
+    size = cells * nu
+    n = model.nodes
+    p = model.params
+    constants = np.array(
+        [
+            p.membrane_length / (2 * math.pi) * float(p.contact_amplitude),
+            float(p.contact_length),
+            CONTACT_CUTOFF_LENGTHS * float(p.contact_length),
+            model.membrane_mobility,
+            1e-4 * float(p.contact_length),
+        ]
+    )
+    work = GroupWork(
+        jac=np.zeros((size, size)),
+        mat=np.zeros((size, size)),
+        pivots=lu_workspace(size),
+        k=np.zeros((6, size)),
+        f0=np.zeros(size),
+        y=np.zeros(size),
+        ynew=np.zeros(size),
+        force=np.zeros(size),
+        scratch=np.zeros(nu),
+        phases=np.zeros(cells, dtype=np.int8),
+        data=np.zeros(cells),
+    )
+    pair = PairWork(
+        z=np.zeros((cells, n), np.complex128),
+        modes=np.zeros(m, np.complex128),
+        spec=np.zeros(n, np.complex128),
+        shifts=np.zeros((cells, cells, 2)),
+        contacts=np.zeros((4 * n * cells, 4), np.int64),
+        constants=constants,
+        twiddle=np.exp(-2j * np.pi * np.arange(n) / n),
+    )
+    return work, pair
+
+
 def group_coefficients(model: Model) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """The terms' coefficient arrays, split like :func:`groups`."""
     out = []
@@ -299,6 +395,27 @@ def pack(modes: np.ndarray, pose: np.ndarray) -> np.ndarray:
 def unpack(u: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
     """Inverse of :func:`pack`: modes (complex128[m]) and pose (float64[3])."""
     return u[:m] + 1j * u[m : 2 * m], u[2 * m : 2 * m + 3].copy()
+
+
+def _rewind(state: dict, schedule: Schedule) -> None:
+    """Bring a cell's state back to its last sample (``state["time"]``) if its steps ran
+    ahead of it (rodas4 samples its continuous extension): the state there, its phase then,
+    and the next step tried from there."""
+    t = float(state["time"][0])
+    clock = state["clock"]
+    if clock[T] <= t + 1e-12 * (1.0 + abs(t)):
+        return
+    state["u"][:] = pack(state["modes"], state["pose"])
+    clock[T] = t
+    clock[H_LAST] = 0.0
+    state["phase_index"][0] = int(np.searchsorted(schedule.start, t, side="right")) - 1
+
+
+_GROUP_FAILURES = {
+    STEP_UNDERFLOW: "the step size underflowed",
+    SINGULAR: "the iteration matrix is singular",
+    3: "more membrane contacts than the contact table holds (membranes overlapping)",
+}
 
 
 class Rodas4Stepper(Stepper):
@@ -324,6 +441,8 @@ class Rodas4Stepper(Stepper):
             model.has_membrane,
         )
         self.atol, self.rtol, self.max_step, self.first_step = atol, rtol, max_step, first_step
+        self._group = None  # the group loop, compiled on first use
+        self._group_work: dict[int, tuple[GroupWork, PairWork]] = {}
 
     def start(self, modes, pose, schedule):
         u = pack(np.asarray(modes, dtype=np.complex128), np.asarray(pose, dtype=np.float64))
@@ -382,6 +501,76 @@ class Rodas4Stepper(Stepper):
         state["time"][0] = times[-1]
         return modes, pose
 
+    def advance_cells(
+        self,
+        states: list[dict],
+        schedules: list[Schedule],
+        shifts: np.ndarray,
+        t_end: float,
+        rewind: bool = True,
+    ) -> None:
+        """Advance cells in contact together to ``t_end`` (s): ``states`` (each cell's, from
+        :meth:`start`, at one time) and ``schedules`` are the members', ``shifts``
+        (float64[G, G, 2], cm) the image shift of member d's points seen from member c. The
+        group's steps land on every member's switches; afterwards each member's state holds
+        the group's clock and its own slice of the last step's continuous extension.
+        ``rewind`` brings every member back to its last sample first (steps of a cell alone,
+        or of another group, may have run ahead of it); False continues a group that stepped
+        together over the last interval from where its steps stopped."""
+        if self._group is None:
+            self._group = compiled_group(self.model)
+        g = len(states)
+        if g not in self._group_work:
+            self._group_work[g] = group_work(self.model, g)
+        work, pair = self._group_work[g]
+        pair.shifts[:] = shifts
+        nu = states[0]["u"].size
+        if rewind:
+            for s, schedule in zip(states, schedules, strict=True):
+                _rewind(s, schedule)
+        u = np.concatenate([s["u"] for s in states])
+        clock = states[0]["clock"].copy()
+        clock[H_NEXT] = min(s["clock"][H_NEXT] for s in states)
+        p = np.array([s["phase_index"][0] for s in states], dtype=np.int64)
+        counters = np.zeros(4, dtype=np.int64)
+        dense = np.concatenate([s["dense"] for s in states], axis=1)
+        offsets = np.cumsum([0] + [len(s.start) for s in schedules])
+        table = (
+            np.concatenate([s.start for s in schedules]),
+            np.concatenate([s.phase for s in schedules]),
+            np.concatenate([s.data for s in schedules]),
+            offsets.astype(np.int64),
+        )
+        sample = np.empty(u.size)
+        status = self._group(
+            LoopState(u, clock, p, counters, dense),
+            float(t_end),
+            sample,
+            table,
+            self.problem,
+            Control(self.atol, self.rtol, self.max_step),
+            Coefficients(RODAS4.a, RODAS4.c, RODAS4.dense),
+            self.ws,
+            work,
+            pair,
+        )
+        if status != OK:
+            raise SimulationError(
+                f"rodas4 failed on a group of {g} cells at t = {clock[T]:.9g} s: "
+                + _GROUP_FAILURES.get(status, f"status {status}")
+            )
+        size = 2 * self.model.cutoff + 1
+        for c, s in enumerate(states):
+            part = slice(c * nu, (c + 1) * nu)
+            s["u"][:] = u[part]
+            s["clock"][:] = clock
+            s["phase_index"][0] = p[c]
+            s["counters"] += counters
+            s["dense"][:] = dense[:, part]
+            s["modes"][:] = sample[part][:size] + 1j * sample[part][size : 2 * size]
+            s["pose"][:] = sample[part][2 * size :]
+            s["time"][0] = t_end
+
     def statistics(self, state) -> dict[str, int]:
         """Steps accepted and rejected, right-hand-side and Jacobian evaluations so far."""
         c = state["counters"]
@@ -397,6 +586,8 @@ class Rodas4(Integrator):
     """Adaptive linearly implicit RODAS4 (order 4(3), L-stable) on the whole coupled system."""
 
     name = "rodas4"
+    #: Steps groups of cells in contact together (:meth:`Rodas4Stepper.advance_cells`).
+    steps_groups = True
     description = (
         "adaptive Rosenbrock RODAS4, order 4(3), full Jacobian, steps on the "
         "protocol's switches, dense output"

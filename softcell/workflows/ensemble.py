@@ -26,8 +26,9 @@ from softcell.core.components.registry import (
     default_registry,
 )
 from softcell.core.limits import check_run, check_seed
+from softcell.core.obstacles import check_clear_of_start
 from softcell.core.params import expand_sweep
-from softcell.core.runconfig import RunConfig
+from softcell.core.runconfig import RunConfig, assembly_of, with_assembly_terms
 from softcell.errors import ConfigError, SoftcellError
 from softcell.workflows.cluster import check_scheduler, cluster_client, run_on_cluster
 from softcell.workflows.resume import expected_bytes, resume_plan
@@ -74,6 +75,8 @@ def plan(
             f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
         )
     check_seed(seed)
+    config = with_assembly_terms(config)
+    assembly = assembly_of(config)
     config.check_components(registry)
     check_in_use(config.parameters, registry, config.components)
     # Only the parameters of the components in use: installing a plugin changes no request.
@@ -83,13 +86,19 @@ def plan(
     for _, params in points:
         check_run(params)
         check_point(params, registry, config.components)
+    if assembly is not None:
+        _check_assembly(assembly, config, points, realizations, seed, membrane, registry)
+    else:
+        for _, params in points:
+            check_clear_of_start(params)
     _check_total(points, realizations, out)
     swept = tuple(
         dict.fromkeys(
             ["radius", *(k for k, v in config.parameters.items() if isinstance(v, list | tuple))]
         )
     )
-    stored = stored_components(dict(config.components), membrane, registry)
+    settings = assembly.as_dict() if assembly is not None else None
+    stored = stored_components(dict(config.components), membrane, registry, settings)
     return [
         Task(
             point=p,
@@ -101,10 +110,47 @@ def plan(
             membrane=membrane,
             path=str(out / f"point{p:03d}_realization{r:04d}.nc"),
             swept=swept,
+            assembly=settings,
         )
         for p, (_, params) in enumerate(points)
         for r in range(realizations)
     ]
+
+
+def _check_assembly(assembly, config, points, realizations, seed, membrane, registry) -> None:
+    """Refuse an assembly that cannot run, before anything is computed: a free bot, an
+    integrator that does not step groups of cells, a nonlinear friction law, obstacles in a
+    periodic box, cells that do not fit in memory, and cells that cannot be placed (every
+    realization's placement is drawn here)."""
+    from softcell.core.crowd import starting_centres
+    from softcell.core.limits import check_assembly_memory
+
+    if not membrane:
+        raise SoftcellError("an assembly of cells needs membranes: drop --free-bot or [assembly]")
+    integrator = config.components["integrator"]
+    if assembly.cells > 1 and not getattr(
+        registry.get("integrator", integrator), "steps_groups", False
+    ):
+        raise SoftcellError(
+            f"integrator {integrator!r} does not step groups of cells in contact: an assembly "
+            "of more than one cell needs rodas4"
+        )
+    for _, params in points:
+        law = registry.get("friction_law", config.components["friction_law"])(params)
+        if not law.linear:
+            raise SoftcellError(
+                f"friction law {law.name!r} is not linear: an assembly of cells needs the "
+                "viscous law (the pair forces move the membranes by their mobility)"
+            )
+        if assembly.boundary == "periodic" and str(params.get("obstacles", "") or ""):
+            raise SoftcellError(
+                "obstacles in a periodic box are not supported: use boundary walls or the "
+                "open plane"
+            )
+        check_assembly_memory(params, assembly.cells)
+    for p, (_, params) in enumerate(points):
+        for r in range(realizations if assembly.placement == "random" else 1):
+            starting_centres(params, assembly, seed, p, r)
 
 
 def _check_total(points: list, realizations: int, out: Path) -> None:

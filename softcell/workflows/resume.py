@@ -224,4 +224,4 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
 
 def expected_bytes(tasks: list[Task]) -> int:
     """Disk space (bytes) the files of ``tasks`` will take, about."""
-    return sum(file_bytes(t.params) for t in tasks)
+    return sum(file_bytes(t.params) * (t.assembly["cells"] if t.assembly else 1) for t in tasks)

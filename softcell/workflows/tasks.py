@@ -22,6 +22,7 @@ import numpy as np
 from softcell._version import __version__
 from softcell.config import CHECKPOINT_EVERY
 from softcell.core.components.registry import Registry, default_registry
+from softcell.core.crowd import cell_rngs
 from softcell.core.engine import Model, Stepper, build_integrator, build_model
 from softcell.core.params import Parameters
 from softcell.core.realization import Saved, realization_rng, record_dataset, run_realization
@@ -57,6 +58,8 @@ class Task:
         Its file.
     swept : tuple of str
         Parameters stored as scalar coordinates too.
+    assembly : dict, optional
+        Many cells (:meth:`softcell.core.assembly.Assembly.as_dict`); None for one cell.
     """
 
     point: int
@@ -68,6 +71,7 @@ class Task:
     membrane: bool
     path: str
     swept: tuple[str, ...] = field(default=("radius",))
+    assembly: dict[str, Any] | None = None
 
     @property
     def name(self) -> str:
@@ -75,8 +79,8 @@ class Task:
 
     @property
     def duration(self) -> float:
-        """Its simulated duration (s)."""
-        return float(self.params.duration)
+        """Its simulated duration (s); for an assembly, summed over its cells."""
+        return float(self.params.duration) * (self.assembly["cells"] if self.assembly else 1)
 
     def request(self) -> dict[str, Any]:
         """Every setting a file or checkpoint of this task must have been made with, in the
@@ -92,10 +96,16 @@ class Task:
 
 
 def stored_components(
-    components: dict[str, Any], membrane: bool, registry: Registry
+    components: dict[str, Any],
+    membrane: bool,
+    registry: Registry,
+    assembly: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The component names as a file stores them (see :attr:`Task.stored_components`)."""
+    """The component names as a file stores them (see :attr:`Task.stored_components`), with
+    an assembly's settings under ``assembly`` (none for one cell)."""
     stored = {**components, "membrane": membrane}
+    if assembly is not None:
+        stored["assembly"] = dict(assembly)
     if not membrane:
         names: Iterable[str] = components.get("energy_terms", [])
         stored["energy_terms"] = [n for n in names if registry.get("energy_term", n).has_bot_energy]
@@ -267,6 +277,8 @@ def run_task(
             warnings.simplefilter("ignore", PluginWarning)
             registry = default_registry()
     model, stepper = _model_and_stepper(task, registry)
+    if task.assembly is not None:
+        return _run_assembly(task, model, stepper, progress, checkpoint_every, stoppable)
     path = Path(task.path)
     checkpoint = checkpoint_path(path)
     stop_file = path.parent / STOP_FILE
@@ -288,6 +300,61 @@ def run_task(
     ds = record_dataset(
         record,
         model,
+        realization=task.realization,
+        seed=task.seed,
+        components=task.stored_components,
+        extra_attrs={
+            "softcell_point": task.point,
+            "softcell_spawn_key": f"{task.point},{task.realization}",
+        },
+        scalar_coords=task.swept,
+    )
+    write_dataset(ds, path)
+    checkpoint.unlink(missing_ok=True)
+    return str(path)
+
+
+def _run_assembly(
+    task: Task,
+    model: Model,
+    stepper: Stepper,
+    progress: Callable[[float], None] | None,
+    checkpoint_every: float,
+    stoppable: bool,
+) -> str | None:
+    """Run one realization of an assembly of cells and write its file, checkpointing as a
+    single cell's realization does."""
+    from softcell.core.assembly import Assembly
+    from softcell.core.crowd import crowd_dataset, run_assembly, starting_centres
+    from softcell.io.netcdf import write_dataset
+
+    assembly = Assembly(**task.assembly)
+    path = Path(task.path)
+    checkpoint = checkpoint_path(path)
+    stop_file = path.parent / STOP_FILE
+    centres = starting_centres(model.params, assembly, task.seed, task.point, task.realization)
+    try:
+        record = run_assembly(
+            model,
+            stepper,
+            assembly.domain,
+            centres,
+            cell_rngs(task.seed, task.point, task.realization, assembly.cells),
+            label=task.name,
+            checkpoint=FileCheckpoint(checkpoint, canonical(task.request())),
+            checkpoint_every=checkpoint_every,
+            progress=(lambda dt: progress(dt * assembly.cells)) if progress else None,
+            stop=stop_file.exists if stoppable else None,
+        )
+    except Interrupted:
+        if not stoppable:
+            raise
+        return None
+    ds = crowd_dataset(
+        record,
+        model,
+        assembly,
+        centres,
         realization=task.realization,
         seed=task.seed,
         components=task.stored_components,

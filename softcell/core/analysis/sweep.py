@@ -680,6 +680,11 @@ def analyze(
             f"analyze: ds is a {type(ds).__name__}, not an xarray.Dataset (open one with "
             "softcell.open_dataset)"
         )
+    if "cell" in ds.dims:
+        raise SoftcellError(
+            f"analyze: this is an assembly of {ds.sizes['cell']} cells (a cell dim); its "
+            "analysis is not built yet: analyze one cell, ds.isel(cell=0), in Python"
+        )
     setup = _Setup(ds, options, registry if registry is not None else default_registry())
     res = _Results(setup, ds.sizes["realization"])
     radius = np.array([_radius(ds, p) for p in setup.points])

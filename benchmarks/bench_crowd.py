@@ -1,0 +1,128 @@
+"""Assemblies of cells: what many cells cost (rodas4, R = 5 cm, the default model).
+
+- the overhead of the assembly loop: one cell as an assembly against the single-cell run,
+  the same realization, interleaved, medians of 3 (target: within 10 %);
+- 16 cells at an area fraction of 0.35 in a periodic box, 100 simulated seconds on one core
+  (target: 5 minutes);
+- wall time per simulated second for 4, 16 and 64 cells at that area fraction (10 simulated
+  seconds each; target: 64 cells at most 4.8 times 16 cells, i.e. 1.2 times linear);
+- memory per cell: the record of 100 simulated seconds (the membrane every 0.01 s as 33 modes,
+  the bodies' fine record) and the peak of the suite.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+
+import numpy as np
+
+RADIUS = 5.0
+FRACTION = 0.35
+
+
+def _built(duration: float):
+    from softcell.core.components.registry import default_registry
+    from softcell.core.engine import build_integrator, build_model
+    from softcell.core.params import Parameters
+
+    registry = default_registry()
+    params = Parameters(
+        {"radius": RADIUS, "duration": duration}, registry.parameter_specs().values()
+    )
+    model = build_model(
+        params, ["bending", "tension", "contact"], "run_and_tumble", registry=registry
+    )
+    return model, build_integrator("rodas4", params, registry).build(model)
+
+
+def _crowd(cells: int, duration: float, seed: int = 0) -> tuple[float, object]:
+    """Wall seconds of one realization of ``cells`` cells at FRACTION in a periodic box."""
+    from softcell.core.assembly import Domain, place_cells
+    from softcell.core.crowd import cell_rngs, placement_rng, run_assembly
+
+    model, stepper = _built(duration)
+    box = math.sqrt(cells * math.pi * RADIUS**2 / FRACTION)
+    domain = Domain("periodic", box)
+    centres = place_cells(cells, RADIUS, domain, placement_rng(seed, 0, 0))
+    start = time.perf_counter()
+    record = run_assembly(model, stepper, domain, centres, cell_rngs(seed, 0, 0, cells))
+    return time.perf_counter() - start, record
+
+
+def _overhead(duration: float = 60.0, rounds: int = 3) -> float:
+    """Median wall time of the one-cell assembly over the single-cell run's."""
+    from softcell.core.assembly import Domain
+    from softcell.core.crowd import cell_rngs, run_assembly
+    from softcell.core.realization import realization_rng, run_realization
+
+    model, stepper = _built(duration)
+    _, single = _built(duration)
+    run_assembly(model, stepper, Domain(), np.zeros((1, 2)), cell_rngs(0, 0, 0, 1))  # compile
+    ratios = []
+    for _ in range(rounds):
+        start = time.perf_counter()
+        run_realization(model, single, realization_rng(0, 0, 0))
+        alone = time.perf_counter() - start
+        start = time.perf_counter()
+        run_assembly(model, stepper, Domain(), np.zeros((1, 2)), cell_rngs(0, 0, 0, 1))
+        ratios.append((time.perf_counter() - start) / alone)
+    return statistics.median(ratios)
+
+
+def rows() -> list[dict[str, object]]:
+    out = [
+        {
+            "benchmark": "one-cell assembly / single cell",
+            "value": _overhead(),
+            "unit": "x",
+            "target": 1.1,
+            "note": "R = 5 cm, 60 s, same realization, median of 3",
+        }
+    ]
+    _crowd(4, 0.1)  # compile the group loop outside the timings
+    wall, record = _crowd(16, 100.0)
+    out.append(
+        {
+            "benchmark": "16 cells, 100 s, phi = 0.35",
+            "value": wall,
+            "unit": "s",
+            "target": 300.0,
+            "note": f"periodic box, one core; {record.statistics['grouped_intervals']} group "
+            "intervals",
+        }
+    )
+    per_cell = (record.modes.nbytes + record.fine_pose.nbytes + record.fine_center.nbytes) / 16
+    out.append(
+        {
+            "benchmark": "record per cell, 100 s",
+            "value": per_cell / 2**20,
+            "unit": "MiB",
+            "target": None,
+            "note": "33 modes every 0.01 s and the fine record, in memory",
+        }
+    )
+    per_second = {}
+    for cells in (4, 16, 64):
+        wall, _ = _crowd(cells, 10.0)
+        per_second[cells] = wall / 10.0
+        out.append(
+            {
+                "benchmark": f"{cells} cells, wall per simulated s",
+                "value": per_second[cells],
+                "unit": "s/s",
+                "target": None,
+                "note": "phi = 0.35, periodic, 10 s",
+            }
+        )
+    out.append(
+        {
+            "benchmark": "64 cells / 16 cells, wall per s",
+            "value": per_second[64] / per_second[16],
+            "unit": "x",
+            "target": 4.8,
+            "note": "linear would be 4",
+        }
+    )
+    return out
