@@ -32,7 +32,11 @@ def _built(duration: float):
         {"radius": RADIUS, "duration": duration}, registry.parameter_specs().values()
     )
     model = build_model(
-        params, ["bending", "tension", "contact"], "run_and_tumble", registry=registry
+        params,
+        ["bending", "tension", "contact"],
+        "run_and_tumble",
+        registry=registry,
+        pair_terms=["repulsion"],
     )
     return model, build_integrator("rodas4", params, registry).build(model)
 

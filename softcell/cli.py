@@ -135,12 +135,15 @@ def _config(args: argparse.Namespace) -> RunConfig:
 
 def _assembly_flags(args: argparse.Namespace) -> dict[str, Any]:
     """The ``[assembly]`` settings given as flags (--cells, --box, --boundary, --placement,
-    --gap)."""
-    return {
+    --gap, --pair-terms)."""
+    flags = {
         key: getattr(args, f"assembly_{key}")
-        for key in ("cells", "box", "boundary", "placement", "gap")
+        for key in ("cells", "box", "boundary", "placement", "gap", "pair_terms")
         if getattr(args, f"assembly_{key}", None) is not None
     }
+    if "pair_terms" in flags:
+        flags["pair_terms"] = [n.strip() for n in flags["pair_terms"].split(",")]
+    return flags
 
 
 def _obstacle_flags(args: argparse.Namespace) -> str:
@@ -714,6 +717,12 @@ def _add_assembly_flags(p: argparse.ArgumentParser) -> None:
         metavar="CM",
         help="smallest starting gap between rings, walls and obstacles (cm, default 1)",
     )
+    group.add_argument(
+        "--pair-terms",
+        dest="assembly_pair_terms",
+        metavar="A,B",
+        help="how the membranes meet: comma-separated pair terms (default repulsion)",
+    )
 
 
 def _add_params(p: argparse.ArgumentParser, strict: bool, specs) -> None:
@@ -837,6 +846,74 @@ def _add_render(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("--no-head-mark", action="store_true", help="no mark at the bot's head")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_render)
+
+
+def _add_animate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    p.add_argument("input", type=Path, help="simulation file or directory")
+    p.add_argument(
+        "-o", "--output", type=Path, required=True, help="movie: .mp4 (H.264) or .gif (slides)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace an existing movie")
+    p.add_argument(
+        "--realizations",
+        help="realizations side by side, e.g. 0,1,2 (default: the first up to 4; one for an "
+        "assembly, all its cells in one panel)",
+    )
+    p.add_argument("--point", help="sweep point, e.g. radius=1 (an index)")
+    p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    p.add_argument(
+        "--speed", type=float, default=1.0, help="simulated seconds per movie second (default 1)"
+    )
+    p.add_argument("--start", type=float, default=0.0, help="first frame time [s] (default 0)")
+    p.add_argument("--end", type=float, help="last frame time [s] (default: the record's end)")
+    p.add_argument("--trail", type=float, default=5.0, help="trail length [s] (default 5)")
+    p.add_argument("--height", type=int, default=480, help="frame height [px] (default 480)")
+    p.add_argument(
+        "--crf",
+        type=int,
+        default=20,
+        help="H.264 quality: 0 lossless .. 51 smallest (default 20; 28 for the web)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_animate)
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from softcell.io.animate import animate
+    from softcell.io.files import check_output
+    from softcell.io.netcdf import open_inputs
+    from softcell.io.render import parse_point
+
+    check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
+    realizations = None
+    if args.realizations:
+        try:
+            realizations = [int(v) for v in args.realizations.split(",")]
+        except ValueError:
+            raise SoftcellError(
+                f"--realizations {args.realizations} is not allowed: must be indices, e.g. 0,1"
+            ) from None
+    ds = open_inputs([args.input])
+    if args.point:
+        ds = ds.isel(parse_point(args.point, "--point"))
+    movie = animate(
+        ds,
+        args.output,
+        realizations=realizations,
+        fps=args.fps,
+        speed=args.speed,
+        start=args.start,
+        end=args.end,
+        trail=args.trail,
+        height=args.height,
+        crf=args.crf,
+        progress=not args.quiet,
+    )
+    print(
+        f"{movie.path}: {movie.frames} frames at {movie.fps:g}/s, {movie.size[0]}x"
+        f"{movie.size[1]} px, t = {movie.span[0]:g} .. {movie.span[1]:.6g} s"
+    )
+    return 0
 
 
 def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
@@ -1021,6 +1098,11 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
         _add_analyze,
     ),
     "render": ("a top-view movie of one simulated realization", _add_render),
+    "animate": (
+        "a movie to watch (MP4 or GIF): realizations side by side, or an assembly's cells, "
+        "with trails, stop and go",
+        _add_animate,
+    ),
     "track": ("track a top-view video into the simulation schema", _add_track),
     "figures": (
         "the paper's figures (PNG and PDF) from an analysis of a radius sweep",
@@ -1063,6 +1145,10 @@ workflows:
     softcell simulate --radius 4,8,12 --realizations 5 --duration 120 -o run
     softcell analyze run -o analysis.nc
     softcell figures analysis.nc --simulations run -o figures
+  watch them: realizations side by side, or a crowd of cells
+    softcell animate run --point radius=0 -o cells.mp4 --end 30
+    softcell simulate --cells 16 --box 60 --duration 60 -o crowd
+    softcell animate crowd -o crowd.mp4
   a camera's view and back: render -> track -> analyze
     softcell render run --point radius=2 -o cell.mkv --start 15 --end 45
     softcell track cell.mkv --px-per-cm 10 --origin=X0,Y0 -o tracked.nc  (render

@@ -17,7 +17,14 @@ def test_plugins_lists_every_kind(capsys):
 
     assert main(["plugins"]) == 0
     out = capsys.readouterr().out
-    kinds = ("energy_term", "driving_protocol", "friction_law", "integrator", "stopgo_detector")
+    kinds = (
+        "energy_term",
+        "driving_protocol",
+        "friction_law",
+        "integrator",
+        "stopgo_detector",
+        "pair_term",
+    )
     assert sorted(KINDS.values()) == sorted(kinds)
     for kind in kinds:
         assert f"{kind} (" in out
@@ -176,7 +183,7 @@ def test_every_example_of_the_top_level_help_is_a_valid_command_line():
         for line in WORKFLOWS.splitlines()
         if line.strip().startswith("softcell ")
     ]
-    assert len(examples) == 7
+    assert len(examples) == 10
     for example in examples:
         args = parse_arguments(shlex.split(example.replace("X0,Y0", "1.5,-2"))[1:])
         assert args.command == shlex.split(example)[1], example

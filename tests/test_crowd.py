@@ -10,29 +10,31 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from matplotlib.path import Path as Polygon
+from numba import njit
 
 from softcell.cli import main
 from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.assembly import Domain
-from softcell.core.components.registry import default_registry
+from softcell.core.components.registry import default_registry, registered
 from softcell.core.crowd import cell_rngs, run_assembly
 from softcell.core.engine import build_integrator, build_model, circle_modes, equilibrium_radius
-from softcell.core.params import Parameters
+from softcell.core.params import Parameters, ParameterSpec
 from softcell.core.realization import realization_rng, run_realization
 from softcell.core.schema import with_cell
 from softcell.io.netcdf import open_dataset
 from softcell.kernels.spectral import resample
+from softcell.plugin import PairTerm, hookimpl
 from softcell.plugins.rodas4 import compiled_group, group_work, pack
 
 TERMS = ["bending", "tension", "contact"]
 
 
-def _built(**values):
+def _built(pair_terms=("repulsion",), **values):
     registry = default_registry()
     params = Parameters(
         {"radius": 5.0, "duration": 1.0, **values}, registry.parameter_specs().values()
     )
-    model = build_model(params, TERMS, "run_and_tumble", registry=registry)
+    model = build_model(params, TERMS, "run_and_tumble", registry=registry, pair_terms=pair_terms)
     stepper = build_integrator("rodas4", params, registry).build(model)
     return model, stepper
 
@@ -73,6 +75,20 @@ def _rates(model, stepper, u, shifts=None):
         part = slice(c * nu, (c + 1) * nu)
         stepper.rhs(u[part], phases[c], data[c], alone[part], stepper.problem, stepper.ws)
     return out, alone, count, (module, work, pair, phases, data)
+
+
+def _differences(module, stepper, pair, u, phases, data, h):
+    """The group rate's Jacobian by central differences of step ``h`` in every unknown."""
+    numeric = np.zeros((u.size, u.size))
+    for i in range(u.size):
+        plus, minus = u.copy(), u.copy()
+        plus[i] += h
+        minus[i] -= h
+        fp, fm = np.zeros(u.size), np.zeros(u.size)
+        module.group_rhs(plus, phases, data, fp, stepper.problem, stepper.ws, pair)
+        module.group_rhs(minus, phases, data, fm, stepper.problem, stepper.ws, pair)
+        numeric[:, i] = (fp - fm) / (2 * h)
+    return numeric
 
 
 def test_the_pair_force_is_minus_the_gradient_of_an_independent_contact_energy(built):
@@ -122,16 +138,7 @@ def test_the_group_jacobian_is_the_derivative_of_the_group_rate(built):
         u, phases, data, stepper.problem, stepper.ws, pair, work.jac, work.scratch
     )
     jac = work.jac.copy()
-    numeric = np.zeros_like(jac)
-    h = 1e-7
-    for i in range(u.size):
-        plus, minus = u.copy(), u.copy()
-        plus[i] += h
-        minus[i] -= h
-        fp, fm = np.zeros(u.size), np.zeros(u.size)
-        module.group_rhs(plus, phases, data, fp, stepper.problem, stepper.ws, pair)
-        module.group_rhs(minus, phases, data, fm, stepper.problem, stepper.ws, pair)
-        numeric[:, i] = (fp - fm) / (2 * h)
+    numeric = _differences(module, stepper, pair, u, phases, data, 1e-7)
     nu = u.size // 2
     cross = jac[:nu, nu:]
     assert np.abs(cross).max() > 1.0  # the rings are coupled
@@ -253,6 +260,39 @@ def test_no_membrane_goes_into_another_by_more_than_a_few_lambda(seed):
     assert _deepest(record, domain, model) < 2 * lam
 
 
+@pytest.mark.slow  # compiles a model of its own (walls and a post): ~1 min
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_no_membrane_goes_into_a_wall_or_a_post_by_more_than_a_few_lambda(seed):
+    """Five cells placed at random in a walled box of side 36 cm around a post of radius 3 cm:
+    no membrane point goes more than 2 lambda into another ring, or 3 lambda into the post
+    or the walls (the single cell's bound in a corral)."""
+    from softcell.core.assembly import place_cells
+    from softcell.core.obstacles import surface_distances
+
+    post = "post 0 0 3"
+    registry = default_registry()
+    params = Parameters(
+        {"radius": 5.0, "duration": 2.0, "obstacles": post, "arena_side": 36.0},
+        registry.parameter_specs().values(),
+    )
+    terms = [*TERMS, "obstacles", "arena"]
+    model = build_model(
+        params, terms, "run_and_tumble", registry=registry, pair_terms=["repulsion"]
+    )
+    stepper = build_integrator("rodas4", params, registry).build(model)
+    domain = Domain("walls", 36.0)
+    radius = equilibrium_radius(params)
+    rng = np.random.default_rng(seed)
+    centres = place_cells(5, radius, domain, rng, placement="random", gap=0.2, obstacles=post)
+    record = run_assembly(model, stepper, domain, centres, cell_rngs(seed, 0, 0, 5))
+    lam = float(params.contact_length)
+    assert _deepest(record, domain, model) < 2 * lam
+    x, y = resample(record.modes.reshape(-1, record.modes.shape[-1]), model.nodes)
+    assert -surface_distances(x, y, post).min() < 3 * lam
+    assert np.abs(np.stack([x, y])).max() < 18.0 + 3 * lam
+
+
 def test_cell_dims_follow_the_time_dim():
     assert with_cell(("realization", "time", "node")) == ("realization", "time", "cell", "node")
     assert with_cell(("realization", "fine_time")) == ("realization", "fine_time", "cell")
@@ -337,3 +377,92 @@ def test_an_interrupted_assembly_resumes_to_the_same_bytes(tmp_path, monkeypatch
     resumed = simulate(config, out, seed=4, progress=False)[0]
     assert resumed.read_bytes() == whole.read_bytes()
     assert not list(out.glob(".*.ckpt.npz"))
+
+
+# -- a pair term from a plugin: adhesion ------------------------------------------------------
+
+
+@njit
+def adhesion_law(rho, coefficients, out):
+    """e = -s exp(-(rho / w)^2) within 5 w: coefficients [s (N cm), w (cm), 5 w (cm)]."""
+    strength, width, reach = coefficients[0], coefficients[1], coefficients[2]
+    if rho > reach:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+        return
+    x = rho / width
+    e = -strength * math.exp(-x * x)
+    out[0] = e
+    out[1] = -2.0 * x / width * e
+    out[2] = (4.0 * x * x - 2.0) / (width * width) * e
+
+
+class Adhesion(PairTerm):
+    name = "adhesion"
+    description = "a Gaussian well between membranes"
+    parameters = (
+        ParameterSpec("adhesion_strength", 1e-3, "N cm", "depth of the adhesion well", minimum=0.0),
+        ParameterSpec("adhesion_width", 0.2, "cm", "width of the adhesion well", minimum=0.0),
+    )
+
+    def coefficients(self):
+        w = float(self.params.adhesion_width)
+        return np.array([float(self.params.adhesion_strength), w, 5 * w])
+
+    def law_kernel(self):
+        return adhesion_law
+
+    def reach(self):
+        return 5 * float(self.params.adhesion_width)
+
+
+class AdhesionPlugin:
+    @staticmethod
+    @hookimpl
+    def softcell_pair_terms():
+        return [Adhesion]
+
+
+def test_a_plugin_pair_term_enters_the_forces_and_the_jacobian():
+    with registered(AdhesionPlugin):
+        model, stepper = _built(pair_terms=("repulsion", "adhesion"))
+        assert model.pair_reach == pytest.approx(1.0)
+        u, _ = _two_rings(model, 0.3)  # beyond the repulsion, inside the well
+        out, alone, count, (module, work, pair, phases, data) = _rates(model, stepper, u)
+        assert count > 40
+        nu = u.size // 2
+        # the second ring is pulled towards the first (its centre mode's rate along -x)
+        assert (out - alone)[nu + model.cutoff] < 0 < (out - alone)[model.cutoff]
+        module.group_jacobian(
+            u, phases, data, stepper.problem, stepper.ws, pair, work.jac, work.scratch
+        )
+        # the well is 0.2 cm wide; smaller steps only add rounding (1e-7: 7e-6)
+        numeric = _differences(module, stepper, pair, u, phases, data, 1e-5)
+        cross = work.jac[:nu, nu:]
+        assert np.abs(cross).max() > 1e-3
+        np.testing.assert_allclose(cross, numeric[:nu, nu:], atol=1e-6 * np.abs(cross).max())
+
+
+def test_adhering_passive_cells_draw_together_symmetrically():
+    with registered(AdhesionPlugin):
+        model, stepper = _built(
+            pair_terms=("repulsion", "adhesion"),
+            drive_force=1e-30,
+            drive_torque=1e-30,
+            duration=0.5,
+        )
+        radius = equilibrium_radius(model.params)
+        centres = np.array([[-radius - 0.15, 0.0], [radius + 0.15, 0.0]])
+        record = run_assembly(model, stepper, Domain(), centres, cell_rngs(0, 0, 0, 2))
+    x = record.fine_center.real
+    assert x[-1, 1] - x[-1, 0] < x[0, 1] - x[0, 0] - 0.02  # drawn together
+    np.testing.assert_allclose(x[:, 0] + x[:, 1], 0.0, atol=1e-9)
+    np.testing.assert_allclose(x[:, 0], -x[:, 1], atol=1e-9)
+
+
+def test_an_unknown_pair_term_is_one_line(tmp_path, capsys):
+    argv = ["simulate", "--radius", "5", "--duration", "0.3", "--quiet", "-o", str(tmp_path / "x")]
+    assert main([*argv, "--cells", "2", "--pair-terms", "repulsion,glue"]) == 2
+    err = capsys.readouterr().err
+    assert "glue" in err and err.count("\n") == 1

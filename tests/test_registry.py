@@ -38,6 +38,7 @@ def test_builtins_register_through_the_hooks():
         "friction_law",
         "integrator",
         "stopgo_detector",
+        "pair_term",
     }
     assert registry.names("friction_law") == ["coulomb", "viscous"]
     assert "arena" in registry.names("energy_term")

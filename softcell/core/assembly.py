@@ -87,6 +87,7 @@ ASSEMBLY_KEYS: dict[str, tuple[type, str]] = {
     "boundary": (str, "1"),
     "placement": (str, "1"),
     "gap": (float, "cm"),
+    "pair_terms": (list, "1"),
 }
 
 
@@ -104,10 +105,13 @@ class Assembly:
     box : float or None
         Side L of the square box (cm); None for the open plane.
     placement : str
-        ``lattice`` or ``random`` (see :func:`place_cells`).
+        ``lattice`` or ``random`` (see ``place_cells`` in this module).
     gap : float
         Smallest starting gap between rings, and between a ring and a wall or an obstacle
         (cm).
+    pair_terms : tuple of str
+        The pair terms by which the cells' membranes meet (registered names; the built-in
+        ``repulsion``, the contact's law, by default).
     """
 
     cells: int = 1
@@ -115,10 +119,19 @@ class Assembly:
     box: float | None = None
     placement: str = "lattice"
     gap: float = 1.0
+    pair_terms: tuple[str, ...] = ("repulsion",)
 
     def __post_init__(self) -> None:
         _check_request(self.cells, 1.0, self.gap, self.placement)
         Domain(self.boundary, self.box)
+        terms = self.pair_terms
+        if isinstance(terms, str) or not all(isinstance(t, str) for t in terms) or not terms:
+            raise ParameterError(
+                "pair_terms", repr(terms), "must be a non-empty list of pair term names", "1"
+            )
+        if len(set(terms)) < len(terms):
+            raise ParameterError("pair_terms", repr(list(terms)), "must name each term once", "1")
+        object.__setattr__(self, "pair_terms", tuple(terms))
 
     @property
     def domain(self) -> Domain:
@@ -132,11 +145,24 @@ class Assembly:
             "box": self.box,
             "placement": self.placement,
             "gap": self.gap,
+            "pair_terms": list(self.pair_terms),
         }
 
     @classmethod
     def from_mapping(cls, data: dict[str, object], source: object = "[assembly]") -> Assembly:
         """An assembly from an ``[assembly]`` table or the flags' values.
+
+        Parameters
+        ----------
+        data : dict
+            Keys of ``ASSEMBLY_KEYS`` (``box`` and ``gap`` in cm); ``boundary`` defaults
+            to ``periodic`` with a box and ``open`` without.
+        source : object
+            What the values came from, for errors (``"[assembly]"``, a file name).
+
+        Returns
+        -------
+        Assembly
 
         Raises
         ------
@@ -160,7 +186,7 @@ class Assembly:
             if kind is float and isinstance(value, int) and not isinstance(value, bool):
                 value, ok = float(value), True
             if not ok:
-                what = {int: "an integer", float: "a number", str: "a name"}[kind]
+                what = {int: "an integer", float: "a number", str: "a name", list: "a list"}[kind]
                 unit_text = "" if unit == "1" else f" ({unit})"
                 raise ConfigError(f"{source}: {key} = {value!r} must be {what}{unit_text}")
             values[key] = value

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from softcell.config import CHECKPOINT_EVERY, CONTACT_CUTOFF_LENGTHS
+from softcell.config import CHECKPOINT_EVERY
 from softcell.core.assembly import Assembly, Domain, contact_groups, place_cells
 from softcell.core.components.contracts import Schedule, Stepper
 from softcell.core.engine.model import Model
@@ -68,11 +68,12 @@ def placement_rng(seed: int, point: int, realization: int) -> np.random.Generato
 
 
 def starting_centres(
-    params, assembly: Assembly, seed: int, point: int, realization: int
+    params, assembly: Assembly, seed: int, point: int, realization: int, reach: float
 ) -> np.ndarray:
     """Where the cells of one realization start (float64[M, 2], cm): rings of the
     equilibrium radius placed by :func:`~softcell.core.assembly.place_cells` (the
-    ``random`` placement draws from :func:`placement_rng`), clear of the obstacles.
+    ``random`` placement draws from :func:`placement_rng`), clear of the obstacles;
+    ``reach`` (cm) is the pair terms' (a periodic box must exceed twice 2 R + reach).
 
     Raises
     ------
@@ -92,7 +93,6 @@ def starting_centres(
         gap=assembly.gap,
         obstacles=obstacles,
     )
-    reach = CONTACT_CUTOFF_LENGTHS * float(params.contact_length)
     contact_groups(centres, radius, reach, assembly.domain)  # a periodic box's size
     return centres
 
@@ -214,7 +214,7 @@ class _Crowd:
             )
         self.model, self.stepper, self.domain = model, stepper, domain
         self.states, self.schedules = states, schedules
-        self.cutoff = CONTACT_CUTOFF_LENGTHS * float(model.params.contact_length)
+        self.cutoff = model.pair_reach
         self.speed = float(model.params.drive_force) / float(model.params.bot_friction)
         self.together: dict[int, tuple[int, ...]] = {}  # each cell's group last interval
         self.redone = 0

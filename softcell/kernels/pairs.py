@@ -1,20 +1,24 @@
 """Membrane-membrane contact between the cells of an assembly: forces on the modes and their
 Jacobian, for rodas4's group loop (``plugins/templates/rodas4_group.py``).
 
-Each point of membrane c feels membrane d as it feels the bot: the energy density
-e = (l0 / 2 pi) A exp(-rho / lambda) per unit xi, with rho the signed distance from the point
-to d's polygon (its N points joined by segments; positive outside d, negative inside), and
-nothing beyond CONTACT_CUTOFF_LENGTHS lambda. Both ways: c's points against d's polygon and
-d's points against c's. The distance to a segment depends on the point and on the segment's
-two ends, so every contact pushes the point and pulls the segment's ends with the opposite
-total force: the pair forces conserve momentum exactly.
+Each point of membrane c has the energy density e(rho) per unit xi (the pair terms' laws,
+summed: ``law(rho, coefficients, out, scratch)`` writes e, de/drho and d^2 e / drho^2), with
+rho the signed distance from the point to d's polygon (its N points joined by segments;
+positive outside d, negative inside), within ``reach``. Both ways: c's points against d's
+polygon and d's points against c's. The distance to a segment depends on the point and on
+the segment's two ends, so every contact pushes the point and pulls the segment's ends with
+the opposite total force: the pair forces conserve momentum exactly.
 
-The partials of e land on the modes as the bot's contact does (docs/model.md §3):
-dg_k/dt += mobility f_hat_k with f_hat_k = -(1/N) sum_n P_n e^{-i k xi_n}, P_n = de/dz_n as
-x + i y. Their second derivatives come from central differences of the analytic gradient,
-the contact's segment held fixed, and map onto the modes through
-dz_n = sum_l dg_l e^{i l xi_n}: a real 2 x 2 block H acts on dz as alpha dz + beta conj(dz),
-which makes two complex m x m matrices per pair of cells.
+The partials de/dq = e'(rho) grad rho land on the modes as the bot's contact does
+(docs/model.md §3): dg_k/dt += mobility f_hat_k with f_hat_k = -(1/N) sum_n P_n
+e^{-i k xi_n}, P_n = de/dz_n as x + i y. Their second derivatives, e'' grad rho grad rho^T +
+e' hess rho, take hess rho from central differences of the analytic grad rho (the contact's
+segment held fixed), and map onto the modes through dz_n = sum_l dg_l e^{i l xi_n}: a real
+2 x 2 block H acts on dz as alpha dz + beta conj(dz), which makes two complex m x m matrices
+per pair of cells.
+
+The functions that take ``law`` are compiled into their caller (``JIT_COMPOSED``), rodas4's
+group loop, whose cache entry keeps them.
 
 Images: a shift (cm) is added to cell d's points as seen from cell c (the minimum image of a
 periodic box, fixed over a sampling interval); the forces do not depend on it otherwise.
@@ -29,12 +33,8 @@ import numpy as np
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.config import JIT
+from softcell.config import JIT, JIT_COMPOSED
 from softcell.kernels.spectral import AXES, derivative_spectrum
-
-#: Contacts whose weight exp(-rho / lambda) is below this are left out of the Jacobian (their
-#: entries are below 1e-7 of a touching point's; the forces keep them up to the cut-off).
-JACOBIAN_WEIGHT = 1e-7
 
 
 @njit(**JIT)
@@ -199,39 +199,29 @@ def _ends(z, shifts, contact):
     )
 
 
-@njit(**JIT)
-def _energy_gradient(q, scale, length, grad, out):
-    """e = scale exp(-rho / length) at the six coordinates q, its gradient into ``out``;
-    returns (rho, e)."""
-    rho = segment_distance(q[0], q[1], q[2], q[3], q[4], q[5], grad)
-    e = scale * math.exp(-rho / length)
-    for i in range(6):
-        out[i] = -e / length * grad[i]
-    return rho, e
-
-
-@njit(**JIT)
-def pair_forces(z, shifts, contacts, count, scale, length, cutoff, mobility, twiddle, out, nu):
+@njit(**JIT_COMPOSED, inline="always")
+def pair_forces(z, shifts, contacts, count, law, coefficients, mobility, twiddle, out, nu):
     """Add the pair forces' mode rates to ``out`` (float64[G nu]: each cell's Re g, Im g,
-    pose, cm s^-1); ``scale`` = (l0 / 2 pi) A (N cm), ``length`` = lambda (cm), ``mobility``
-    2 pi / (gamma_mem l0), ``twiddle`` = exp(-2 pi i n / N)."""
+    pose, cm s^-1); ``law`` and ``coefficients`` are the pair terms' (module docstring),
+    ``mobility`` 2 pi / (gamma_mem l0), ``twiddle`` = exp(-2 pi i n / N)."""
     n = z.shape[1]
     m = (nu - 3) // 2
     lc = (m - 1) // 2
-    q = np.empty(6)
     grad = np.empty(6)
-    partial = np.empty(6)
+    values = np.empty(3)
+    scratch = np.empty(3)
     inv = mobility / n
     for t in range(count):
         row = contacts[t]
-        q[0], q[1], q[2], q[3], q[4], q[5] = _ends(z, shifts, row)
-        rho, _ = _energy_gradient(q, scale, length, grad, partial)
-        if rho > cutoff:
+        px, py, bx, by, cx, cy = _ends(z, shifts, row)
+        rho = segment_distance(px, py, bx, by, cx, cy, grad)
+        law(rho, coefficients, values, scratch)
+        if values[1] == 0.0:
             continue
         for node in range(3):
             cell = row[0] if node == 0 else row[2]
             index = row[1] if node == 0 else (row[3] + node - 1) % n
-            p = complex(partial[2 * node], partial[2 * node + 1])
+            p = values[1] * complex(grad[2 * node], grad[2 * node + 1])
             base = cell * nu
             cursor = (-lc * index) % n
             for j in range(m):
@@ -244,23 +234,44 @@ def pair_forces(z, shifts, contacts, count, scale, length, cutoff, mobility, twi
 
 
 @njit(**JIT)
-def contact_hessian(q, scale, length, step, hessian):
-    """d^2 e / dq^2 (float64[6, 6]) by central differences of the analytic gradient with the
-    segment held fixed (steps ``step``, cm); returns exp(-rho / length)."""
-    grad = np.empty(6)
+def distance_hessian(q, step, grad, hessian):
+    """rho at the six coordinates q (cm), its gradient into ``grad`` and d^2 rho / dq^2
+    (cm^-1) into ``hessian`` by central differences of the gradient with the segment held
+    fixed (step ``step``, cm); returns rho."""
     plus = np.empty(6)
     minus = np.empty(6)
     shifted = q.copy()
-    rho, _ = _energy_gradient(q, scale, length, grad, plus)
+    rho = segment_distance(q[0], q[1], q[2], q[3], q[4], q[5], grad)
     for j in range(6):
         shifted[j] = q[j] + step
-        _energy_gradient(shifted, scale, length, grad, plus)
+        segment_distance(
+            shifted[0], shifted[1], shifted[2], shifted[3], shifted[4], shifted[5], plus
+        )
         shifted[j] = q[j] - step
-        _energy_gradient(shifted, scale, length, grad, minus)
+        segment_distance(
+            shifted[0], shifted[1], shifted[2], shifted[3], shifted[4], shifted[5], minus
+        )
         shifted[j] = q[j]
         for i in range(6):
             hessian[i, j] = (plus[i] - minus[i]) / (2.0 * step)
-    return math.exp(-rho / length)
+    return rho
+
+
+@njit(**JIT_COMPOSED, inline="always")
+def contact_hessian(q, law, coefficients, step, hessian):
+    """d^2 e / dq^2 (N cm^-1, float64[6, 6]) of one contact at the six coordinates q (cm):
+    e'' grad rho grad rho^T + e' hess rho. Returns False where the law vanishes."""
+    grad = np.empty(6)
+    values = np.empty(3)
+    scratch = np.empty(3)
+    rho = distance_hessian(q, step, grad, hessian)
+    law(rho, coefficients, values, scratch)
+    if values[1] == 0.0 and values[2] == 0.0:
+        return False
+    for i in range(6):
+        for j in range(6):
+            hessian[i, j] = values[2] * grad[i] * grad[j] + values[1] * hessian[i, j]
+    return True
 
 
 @njit(**JIT)
@@ -313,8 +324,8 @@ def _flush_self(sums_a, sums_b, nu, m, n, jac):
                 jac[base + m + j, base + m + i] += a.real - b.real
 
 
-@njit(**JIT)
-def pair_jacobian(z, shifts, contacts, count, scale, length, cutoff, mobility, twiddle, step, jac):
+@njit(**JIT_COMPOSED, inline="always")
+def pair_jacobian(z, shifts, contacts, count, law, coefficients, mobility, twiddle, step, jac):
     """Add the pair forces' Jacobian (s^-1) to ``jac`` (float64[G nu, G nu]), for the
     contacts found at this state (see :func:`pair_forces` for the arguments).
 
@@ -338,7 +349,6 @@ def pair_jacobian(z, shifts, contacts, count, scale, length, cutoff, mobility, t
     u = np.empty(m, np.complex128)
     v = np.empty(m, np.complex128)
     w = np.empty(m, np.complex128)
-    floor = max(JACOBIAN_WEIGHT, math.exp(-cutoff / length))
     current = -1
     for t in range(count):
         row = contacts[t]
@@ -348,7 +358,7 @@ def pair_jacobian(z, shifts, contacts, count, scale, length, cutoff, mobility, t
                 _flush_cross(cross_a, cross_b, current // g, current % g, nu, m, jac)
             current = pair
         q[0], q[1], q[2], q[3], q[4], q[5] = _ends(z, shifts, row)
-        if contact_hessian(q, scale, length, step, hessian) < floor:
+        if not contact_hessian(q, law, coefficients, step, hessian):
             continue
         index = (row[1], row[3], (row[3] + 1) % n)
         for p in range(3):

@@ -2,14 +2,15 @@
 
 A plugin is a module with functions named after the hooks (``softcell_energy_terms``,
 ``softcell_driving_protocols``, ``softcell_friction_laws``, ``softcell_integrators``,
-``softcell_stopgo_detectors``), each marked with :data:`hookimpl` and returning a list of
-component classes, registered under the entry-point group ``softcell``. ``docs/plugins.md``
-is the tutorial; the names below are the public interface, and everything else in softcell is
-private and may move.
+``softcell_stopgo_detectors``, ``softcell_pair_terms``), each marked with :data:`hookimpl`
+and returning a list of component classes, registered under the entry-point group
+``softcell``. ``docs/plugins.md`` is the tutorial; the names below are the public interface,
+and everything else in softcell is private and may move.
 
 Contracts (subclass one per component)
     :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`FrictionLaw`, :class:`Integrator`,
-    :class:`StopGoDetector`, their base :class:`Component`; what an integrator returns:
+    :class:`StopGoDetector`, :class:`PairTerm` (how two cells' membranes meet), their base
+    :class:`Component`; what an integrator returns:
     :class:`Stepper`; what a protocol draws: :class:`Schedule`; what an integrator composes:
     :class:`Model`.
 Parameters
@@ -40,6 +41,7 @@ from softcell.core.components.contracts import (
     EnergyTerm,
     FrictionLaw,
     Integrator,
+    PairTerm,
     Schedule,
     Stepper,
     StopGoDetector,
@@ -67,6 +69,7 @@ __all__ = [
     "FrictionLaw",
     "Integrator",
     "Model",
+    "PairTerm",
     "ParameterError",
     "ParameterSpec",
     "Parameters",

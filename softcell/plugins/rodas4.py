@@ -19,7 +19,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from softcell.config import CONTACT_CUTOFF_LENGTHS
 from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import (
@@ -33,7 +32,7 @@ from softcell.core.engine import (
     stubs,
 )
 from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.compose import compose_bot, template
+from softcell.core.engine.compose import compose_bot, compose_pair_laws, template
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
 from softcell.kernels.linalg import lu_workspace
@@ -297,12 +296,16 @@ def compiled_group(model: Model):
             "by its linear mobility)",
             "1",
         )
+    if not model.pair_terms:
+        raise ParameterError(
+            "pair_terms", "[]", "must name at least one pair term for an assembly", "1"
+        )
     rhs, jacobian, _ = compiled_loop(model)
     module = compile_module(
         "rodas4-group",
         template(__package__ + ".templates", "rodas4_group.py"),
-        {"rhs": rhs, "jacobian": jacobian},
-        f"{_names(model.terms)}; {model.protocol.name}; assembly",
+        {"rhs": rhs, "jacobian": jacobian, "pair_law": compose_pair_laws(model.pair_terms)},
+        f"{_names(model.terms)}; {model.protocol.name}; pairs {_names(model.pair_terms)}",
     )
     return module.advance_group
 
@@ -326,8 +329,9 @@ class GroupWork(NamedTuple):
 class PairWork(NamedTuple):
     """What the pair forces read: the members' points ``z`` (complex128[G, N], cm), scratch
     ``modes`` and ``spec``, the image ``shifts`` (float64[G, G, 2], cm), the ``contacts``
-    table, ``constants`` = [(l0 / 2 pi) A (N cm), lambda (cm), cut-off (cm), membrane
-    mobility, difference step (cm)] and ``twiddle`` = exp(-2 pi i n / N)."""
+    table, ``constants`` = [the pair terms' reach (cm), the membrane's mobility, the
+    difference step of hess rho (cm)], ``twiddle`` = exp(-2 pi i n / N) and ``laws``, the
+    pair terms' coefficient arrays."""
 
     z: np.ndarray
     modes: np.ndarray
@@ -336,6 +340,7 @@ class PairWork(NamedTuple):
     contacts: np.ndarray
     constants: np.ndarray
     twiddle: np.ndarray
+    laws: tuple
 
 
 def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
@@ -344,16 +349,9 @@ def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
     nu = 2 * m + 3
     size = cells * nu
     n = model.nodes
-    p = model.params
-    constants = np.array(
-        [
-            p.membrane_length / (2 * math.pi) * float(p.contact_amplitude),
-            float(p.contact_length),
-            CONTACT_CUTOFF_LENGTHS * float(p.contact_length),
-            model.membrane_mobility,
-            1e-4 * float(p.contact_length),
-        ]
-    )
+    reach = model.pair_reach
+    # hess rho varies on the scale of the distance itself; the step is 1e-6 of the reach
+    constants = np.array([reach, model.membrane_mobility, 1e-6 * reach])
     work = GroupWork(
         jac=np.zeros((size, size)),
         mat=np.zeros((size, size)),
@@ -375,6 +373,7 @@ def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
         contacts=np.zeros((4 * n * cells, 4), np.int64),
         constants=constants,
         twiddle=np.exp(-2j * np.pi * np.arange(n) / n),
+        laws=tuple(np.ascontiguousarray(t.coefficients()) for t in model.pair_terms),
     )
     return work, pair
 

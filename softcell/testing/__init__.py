@@ -3,7 +3,8 @@
 - :func:`registered`: a context manager under which the process-wide registry also holds
   the given plugin modules or objects (register a plugin for one test, without installing it).
 - :func:`check_component` (and :func:`check_energy_term`, :func:`check_friction_law`,
-  :func:`check_driving_protocol`, :func:`check_stopgo_detector`): a component checked against
+  :func:`check_driving_protocol`, :func:`check_stopgo_detector`, :func:`check_pair_term`): a
+  component checked against
   its contract (:mod:`softcell.testing.contracts`), for a plugin's tests.
 - :mod:`softcell.testing.strategies`: Hypothesis strategies (needs the ``test`` extra).
 - :mod:`softcell.testing.camera`: camera-like footage of a simulated cell (a ray caster:
@@ -16,6 +17,7 @@ from softcell.testing.contracts import (
     check_driving_protocol,
     check_energy_term,
     check_friction_law,
+    check_pair_term,
     check_stopgo_detector,
 )
 
@@ -24,6 +26,7 @@ __all__ = [
     "check_driving_protocol",
     "check_energy_term",
     "check_friction_law",
+    "check_pair_term",
     "check_stopgo_detector",
     "registered",
 ]

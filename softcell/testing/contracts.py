@@ -42,6 +42,7 @@ from softcell.core.components.contracts import (
     DrivingProtocol,
     EnergyTerm,
     FrictionLaw,
+    PairTerm,
     StopGoDetector,
     kind_name,
 )
@@ -544,11 +545,73 @@ def check_stopgo_detector(
     _fail(cls, list(dict.fromkeys(problems)))
 
 
+def check_pair_term(
+    cls: type[PairTerm],
+    values: Mapping[str, Any] | None = None,
+    *,
+    points: int = 401,
+    rtol: float = 1e-5,
+) -> None:
+    """Check a pair term's law on signed distances from -reach / 2 to 3 reach / 2.
+
+    Parameters
+    ----------
+    cls : PairTerm subclass
+        The term.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    points : int
+        Distances checked.
+    rtol : float
+        Allowed difference of each derivative from central differences of the value below
+        it, relative to the larger's size (dimensionless).
+
+    Raises
+    ------
+    AssertionError
+        Listing every violation: a reach that is not finite and > 0 (cm), a non-finite value,
+        a value beyond the reach that is not zero, a derivative that differs from central
+        differences.
+    """
+    term, _ = _build(cls, values)
+    reach = float(term.reach())
+    problems: list[str] = []
+    if not (math.isfinite(reach) and reach > 0):
+        _fail(cls, [f"reach() = {reach} cm: must be finite and > 0"])
+    law, coef = term.law_kernel(), np.ascontiguousarray(term.coefficients())
+    rho = np.linspace(-0.5 * reach, 1.5 * reach, points)
+    step = 1e-6 * reach
+
+    def values_at(r: np.ndarray) -> np.ndarray:
+        out, row = np.zeros((r.size, 3)), np.zeros(3)
+        for i, value in enumerate(r):
+            law(float(value), coef, row)
+            out[i] = row
+        return out
+
+    at, plus, minus = values_at(rho), values_at(rho + step), values_at(rho - step)
+    if not np.isfinite(at).all():
+        problems.append(
+            f"law gives a non-finite value at rho = {rho[~np.isfinite(at).all(1)][0]:g} cm"
+        )
+    beyond = rho > reach * (1 + 1e-9)
+    if np.any(at[beyond] != 0.0):
+        problems.append(f"law is not zero beyond reach() = {reach:g} cm")
+    inside = np.abs(rho - reach) > 10 * step
+    for k, name in ((1, "de/drho"), (2, "d2e/drho2")):
+        numeric = (plus[inside, k - 1] - minus[inside, k - 1]) / (2 * step)
+        ok, worst = _close(at[inside, k], numeric, rtol, 1e-300)
+        if not ok:
+            problems.append(f"{name} differs from central differences by {worst:.2g} (relative)")
+    _fail(cls, problems)
+
+
 CHECKS: dict[type, Callable[..., None]] = {
     EnergyTerm: check_energy_term,
     FrictionLaw: check_friction_law,
     DrivingProtocol: check_driving_protocol,
     StopGoDetector: check_stopgo_detector,
+    PairTerm: check_pair_term,
 }
 
 
@@ -556,8 +619,9 @@ def check_component(cls: type, values: Mapping[str, Any] | None = None, **option
     """The check of ``cls``'s kind with parameter ``values`` (each in its declared unit) and
     that check's keyword ``options``: :func:`~softcell.testing.check_energy_term`,
     :func:`~softcell.testing.check_friction_law`,
-    :func:`~softcell.testing.check_driving_protocol` or
-    :func:`~softcell.testing.check_stopgo_detector`.
+    :func:`~softcell.testing.check_driving_protocol`,
+    :func:`~softcell.testing.check_stopgo_detector` or
+    :func:`~softcell.testing.check_pair_term`.
 
     Parameters
     ----------
@@ -578,4 +642,6 @@ def check_component(cls: type, values: Mapping[str, Any] | None = None, **option
     for contract, check in CHECKS.items():
         if isinstance(cls, type) and issubclass(cls, contract):
             return check(cls, values, **options)
-    raise TypeError(f"{cls!r} is not an energy term, friction law, driving protocol or detector")
+    raise TypeError(
+        f"{cls!r} is not an energy term, friction law, driving protocol, detector or pair term"
+    )

@@ -78,14 +78,17 @@ def plan(
     config = with_assembly_terms(config)
     assembly = assembly_of(config)
     config.check_components(registry)
-    check_in_use(config.parameters, registry, config.components)
+    components = dict(config.components)
+    if assembly is not None:
+        components["pair_terms"] = list(assembly.pair_terms)
+        for name in assembly.pair_terms:
+            registry.get("pair_term", name)
+    check_in_use(config.parameters, registry, components)
     # Only the parameters of the components in use: installing a plugin changes no request.
-    points = expand_sweep(
-        config.parameters, list(registry.parameter_specs(config.components).values())
-    )
+    points = expand_sweep(config.parameters, list(registry.parameter_specs(components).values()))
     for _, params in points:
         check_run(params)
-        check_point(params, registry, config.components)
+        check_point(params, registry, components)
     if assembly is not None:
         _check_assembly(assembly, config, points, realizations, seed, membrane, registry)
     else:
@@ -104,7 +107,7 @@ def plan(
             point=p,
             realization=r,
             params=params,
-            components=dict(config.components),
+            components=components,
             stored_components=stored,
             seed=seed,
             membrane=membrane,
@@ -149,8 +152,9 @@ def _check_assembly(assembly, config, points, realizations, seed, membrane, regi
             )
         check_assembly_memory(params, assembly.cells)
     for p, (_, params) in enumerate(points):
+        reach = max(registry.get("pair_term", n)(params).reach() for n in assembly.pair_terms)
         for r in range(realizations if assembly.placement == "random" else 1):
-            starting_centres(params, assembly, seed, p, r)
+            starting_centres(params, assembly, seed, p, r, reach)
 
 
 def _check_total(points: list, realizations: int, out: Path) -> None:

@@ -240,6 +240,7 @@ def _model_and_stepper(task: Task, registry: Registry) -> tuple[Model, Stepper]:
             membrane=task.membrane,
             friction_law=task.components.get("friction_law", "viscous"),
             registry=registry,
+            pair_terms=task.components.get("pair_terms", ()),
         )
         integrator = build_integrator(task.components["integrator"], task.params, registry)
         _BUILT[key] = (model, integrator.build(model))
@@ -332,7 +333,9 @@ def _run_assembly(
     path = Path(task.path)
     checkpoint = checkpoint_path(path)
     stop_file = path.parent / STOP_FILE
-    centres = starting_centres(model.params, assembly, task.seed, task.point, task.realization)
+    centres = starting_centres(
+        model.params, assembly, task.seed, task.point, task.realization, model.pair_reach
+    )
     try:
         record = run_assembly(
             model,

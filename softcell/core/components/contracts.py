@@ -1,4 +1,4 @@
-"""The five component contracts: one base class per kind of plugin component.
+"""The component contracts: one base class per kind of plugin component.
 
 Like xarray's ``BackendEntrypoint``, each contract has class-level ``name`` and
 ``description``, an explicit parameter declaration, and explicit methods; there is no
@@ -48,7 +48,7 @@ class Component(ABC):
     ----------------
     kind : str
         Set by the contract class: ``energy_term``, ``driving_protocol``, ``friction_law``,
-        ``integrator`` or ``stopgo_detector``.
+        ``integrator``, ``stopgo_detector`` or ``pair_term``.
     name : str
         Unique within its kind; lower case, digits and underscores (``run_and_tumble``).
     description : str
@@ -523,12 +523,48 @@ class StopGoDetector(Component):
 
 
 #: Contract class of each kind, by the hook that returns it.
+class PairTerm(Component):
+    """How the membranes of two cells of an assembly meet: an energy density e(rho) per unit
+    xi of a membrane point at signed distance rho (cm) from another cell's membrane (positive
+    outside it, negative inside; rho is taken to that membrane's polygon of N points, both
+    ways: c's points against d and d's points against c). A point and its nearest segment
+    contribute (2 pi / N) e(rho) to the energy (N cm), so e is in N cm; the engine adds the
+    forces on the point and on the segment's two ends (their sum vanishes) and their
+    Jacobian. The built-in ``repulsion`` is the contact's law, (l0 / 2 pi) A exp(-rho /
+    lambda); a plugin adds adhesion, say, as one more term (docs/plugins.md).
+    """
+
+    kind = "pair_term"
+    kernels = {"law_kernel": f"void(float64, {VECTOR}, {VECTOR})"}
+
+    @abstractmethod
+    def law_kernel(self) -> Callable[..., None]:
+        """Return the compiled (``numba.njit``) kernel of the law.
+
+        Kernel signature::
+
+            kernel(rho, coefficients, out) -> None
+
+        ``rho``: float64, the signed distance (cm); ``coefficients``: float64[:], from
+        :meth:`Component.coefficients`. The kernel writes e (N cm), de/drho (N) and
+        d^2 e / drho^2 (N cm^-1) into ``out[0:3]``, all zero beyond :meth:`reach`. It must
+        not allocate. ``context`` is not passed: a law that depends on l0 reads it from its
+        own coefficients.
+        """
+
+    @abstractmethod
+    def reach(self) -> float:
+        """The distance (cm) beyond which the law is zero: cells are coupled, and points
+        searched for, within the largest reach of the terms in use."""
+
+
 CONTRACTS: dict[str, type[Component]] = {
     "softcell_energy_terms": EnergyTerm,
     "softcell_driving_protocols": DrivingProtocol,
     "softcell_friction_laws": FrictionLaw,
     "softcell_integrators": Integrator,
     "softcell_stopgo_detectors": StopGoDetector,
+    "softcell_pair_terms": PairTerm,
 }
 
 

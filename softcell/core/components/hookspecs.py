@@ -22,6 +22,7 @@ if TYPE_CHECKING:
         EnergyTerm,
         FrictionLaw,
         Integrator,
+        PairTerm,
         StopGoDetector,
     )
 
@@ -113,6 +114,23 @@ def softcell_stopgo_detectors() -> list[type[StopGoDetector]]:
         Subclasses of :class:`softcell.plugin.StopGoDetector`. Each labels every
         sample of a speed series (cm/s) as stop (0), go (1) or unknown (-1, where the speed
         is NaN).
+
+    Called once when the registry is built.
+    """
+
+
+@hookspec
+def softcell_pair_terms() -> list[type[PairTerm]]:
+    """Interactions between the membranes of two cells of an assembly this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.plugin.PairTerm`. Each supplies an energy density
+        e(rho) (N cm per unit xi) of a membrane point at signed distance rho (cm) from another
+        cell's membrane, its first two derivatives (N, N cm^-1) in a compiled kernel, and
+        the distance beyond which it vanishes (cm). An assembly chooses its terms by name
+        (``pair_terms`` in ``[assembly]``, ``--pair-terms``; default ``repulsion``).
 
     Called once when the registry is built.
     """

@@ -47,6 +47,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.plugins.explicit_euler",
     "softcell.plugins.rodas4",
     "softcell.plugins.threshold",
+    "softcell.plugins.repulsion",
 )
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
@@ -334,7 +335,8 @@ class Registry:
 
 def chosen(cls: type[Component], components: Mapping[str, Any]) -> bool:
     """Whether ``components`` (names by kind, ``energy_terms`` a list) names ``cls``."""
-    names = components.get("energy_terms" if cls.kind == "energy_term" else cls.kind)
+    lists = {"energy_term": "energy_terms", "pair_term": "pair_terms"}
+    names = components.get(lists.get(cls.kind, cls.kind))
     return cls.name in names if isinstance(names, list | tuple) else cls.name == names
 
 
@@ -369,6 +371,7 @@ def check_point(params: Any, registry: Registry, components: Mapping[str, Any]) 
     names = [("integrator", components["integrator"])]
     names += [("energy_term", n) for n in components.get("energy_terms", [])]
     names += [(k, components[k]) for k in ("driving_protocol", "friction_law") if k in components]
+    names += [("pair_term", n) for n in components.get("pair_terms", [])]
     for kind, name in names:
         registry.get(kind, name).check(params)
 

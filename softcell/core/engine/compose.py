@@ -174,3 +174,20 @@ def compose_bot(terms) -> tuple[Callable[..., None], Callable[..., None]]:
     source = _PREAMBLE + "\n".join(forces) + "\n\n\n" + "\n".join(hessians) + "\n"
     module = compile_module("bot-energies", source, bindings, " + ".join(names) or "none")
     return module.bot_forces, module.bot_hessians
+
+
+def compose_pair_laws(terms) -> Callable[..., None]:
+    """The pair terms' laws summed: ``pair_law(rho, coefficients, out, scratch)`` writes the
+    sum of e, de/drho and d^2 e / drho^2 (N cm, N, N cm^-1) at the signed distance ``rho``
+    (cm) into ``out[0:3]``; ``coefficients`` is the tuple of the terms' arrays, ``scratch``
+    float64[3]."""
+    bindings: dict[str, object] = {}
+    lines = ["@njit(**JIT_FLAGS)\ndef pair_law(rho, coefficients, out, scratch):"]
+    lines.append("    out[0] = 0.0\n    out[1] = 0.0\n    out[2] = 0.0")
+    for i, term in enumerate(terms):
+        bindings[f"p{i}"] = term.law_kernel()
+        lines.append(f"    p{i}(rho, coefficients[{i}], scratch)")
+        lines.append("    for j in range(3):\n        out[j] += scratch[j]")
+    source = _PREAMBLE + "\n".join(lines) + "\n"
+    names = _names([t.law_kernel() for t in terms]) or "no pair terms"
+    return compiled_function("pair-laws", source, "pair_law", bindings, names)

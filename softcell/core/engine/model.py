@@ -18,6 +18,7 @@ from softcell.core.components.contracts import (
     EnergyTerm,
     FrictionLaw,
     Integrator,
+    PairTerm,
     check_kernels,
 )
 from softcell.core.components.registry import Registry
@@ -71,6 +72,8 @@ class Model:
         The component names by kind, as files store them.
     origins : dict
         Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
+    pair_terms : list of PairTerm
+        The pair terms between the membranes of an assembly's cells (none for one cell).
     """
 
     params: Parameters
@@ -92,6 +95,13 @@ class Model:
     names: dict[str, object] = field(default_factory=dict)
     #: Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
     origins: dict[str, str] = field(default_factory=dict)
+    #: The pair terms between the membranes of an assembly's cells (none for one cell).
+    pair_terms: list[PairTerm] = field(default_factory=list)
+
+    @property
+    def pair_reach(self) -> float:
+        """The distance (cm) within which the pair terms act: the largest reach."""
+        return max((t.reach() for t in self.pair_terms), default=0.0)
 
     @property
     def has_membrane(self) -> bool:
@@ -134,6 +144,7 @@ def build_model(
     friction_law: str = "viscous",
     *,
     registry: Registry,
+    pair_terms: Sequence[str] = (),
 ) -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
 
@@ -153,6 +164,8 @@ def build_model(
     registry : Registry
         Where the names are looked up (``default_registry()``: built-ins and installed
         plugins).
+    pair_terms : sequence of str
+        Names of registered pair terms, for an assembly of cells (none for one cell).
 
     Returns
     -------
@@ -170,10 +183,10 @@ def build_model(
         terms = [t for t in terms if t.has_bot_energy]
     drive = registry.get("driving_protocol", protocol)(params)
     friction: FrictionLaw = registry.get("friction_law", friction_law)(params)
-    origins = {
-        f"{c.kind} {c.name}": registry.origin(c.kind, c.name) for c in (*terms, drive, friction)
-    }
-    for component in (*terms, drive, friction):
+    pairs = [registry.get("pair_term", n)(params) for n in pair_terms]
+    everything = (*terms, drive, friction, *pairs)
+    origins = {f"{c.kind} {c.name}": registry.origin(c.kind, c.name) for c in everything}
+    for component in everything:
         check_kernels(component, origins[f"{component.kind} {component.name}"])
     kernels = [t.partials_kernel() for t in terms]
     coefficients = tuple(np.ascontiguousarray(t.coefficients()) for t in terms)
@@ -209,6 +222,7 @@ def build_model(
             "friction_law": friction_law,
         },
         origins=origins,
+        pair_terms=pairs,
     )
     probe_components(model)  # a kernel writing NaN is named here, before anything steps
     return model

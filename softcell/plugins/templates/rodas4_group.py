@@ -4,8 +4,9 @@ block each, from the single-cell loop) plus the membrane-membrane pair forces of
 landing on every member's switches. Compiled per component set by
 :func:`softcell.plugins.rodas4.compiled_group`.
 
-Bound: ``rhs`` and ``jacobian`` (the single-cell loop's, from ``rodas4_loop.py``) and
-``JIT_FLAGS``. Only the viscous friction law: the pair forces move the modes by the
+Bound: ``rhs`` and ``jacobian`` (the single-cell loop's, from ``rodas4_loop.py``),
+``pair_law`` (the pair terms' laws summed, :func:`softcell.core.engine.compose.compose_pair_laws`)
+and ``JIT_FLAGS``. Only the viscous friction law: the pair forces move the modes by the
 membrane's mobility.
 """
 # ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
@@ -45,7 +46,7 @@ from softcell.plugins.rodas4_method import (
 )
 
 #: The names this template expects the loader to bind (besides ``JIT_FLAGS``).
-BOUND = ("rhs", "jacobian")
+BOUND = ("rhs", "jacobian", "pair_law")
 
 #: Status: more contacts than the contact table holds.
 TOO_MANY_CONTACTS = 3
@@ -72,12 +73,11 @@ def group_rhs(u, phases, data, out, problem, ws, pair):
     for c in range(g):
         rhs(u[c * nu : (c + 1) * nu], phases[c], data[c], out[c * nu : (c + 1) * nu], problem, ws)
     _points(u, pair)
-    count = find_contacts(pair.z, pair.shifts, pair.constants[2], pair.contacts)
+    count = find_contacts(pair.z, pair.shifts, pair.constants[0], pair.contacts)
     if count < 0:
         return -1
-    scale, length, cutoff, mobility = pair.constants[:4]
     pair_forces(
-        pair.z, pair.shifts, pair.contacts, count, scale, length, cutoff, mobility,
+        pair.z, pair.shifts, pair.contacts, count, pair_law, pair.laws, pair.constants[1],
         pair.twiddle, out, nu,
     )  # fmt: skip
     return count
@@ -97,13 +97,12 @@ def group_jacobian(u, phases, data, problem, ws, pair, jac, scratch):
         jacobian(uc, phases[c], data[c], problem, ws)
         jac[c * nu : (c + 1) * nu, c * nu : (c + 1) * nu] = ws.jac
     _points(u, pair)
-    count = find_contacts(pair.z, pair.shifts, pair.constants[2], pair.contacts)
+    count = find_contacts(pair.z, pair.shifts, pair.constants[0], pair.contacts)
     if count < 0:
         return -1
-    scale, length, cutoff, mobility, step = pair.constants[:5]
     pair_jacobian(
-        pair.z, pair.shifts, pair.contacts, count, scale, length, cutoff, mobility,
-        pair.twiddle, step, jac,
+        pair.z, pair.shifts, pair.contacts, count, pair_law, pair.laws, pair.constants[1],
+        pair.twiddle, pair.constants[2], jac,
     )  # fmt: skip
     return count
 
