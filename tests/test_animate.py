@@ -86,3 +86,17 @@ def test_the_command_line_writes_a_movie_and_names_it(runs, capsys):
     assert main(["animate", str(one), "-o", str(out), "--quiet"]) == 2  # exists
     assert "--overwrite" in capsys.readouterr().err
     assert np.isfinite(_decoded(out)[1][0]).all()
+
+
+def test_a_sweep_of_assemblies_opens_as_one_dataset_and_animates_one_point(tmp_path):
+    """The box and the starts are per realization, so a sweep's files concatenate along it
+    (no variable without a realization dim for xarray to guess about)."""
+    config = RunConfig(
+        parameters={"radius": [5.0, 5.5], "duration": 0.3}, assembly={"cells": 2, "box": 30.0}
+    )
+    simulate(config, tmp_path / "sweep", realizations=2, progress=False)
+    ds = open_dataset(tmp_path / "sweep")
+    assert ds["domain_box"].dims == ("radius", "realization")
+    assert ds["cell_start_x"].dims == ("radius", "realization", "cell")
+    movie = animate(ds.isel(radius=1), tmp_path / "one.mp4", progress=False)
+    assert movie.size[0] == 480 and _decoded(movie.path)[0] == "h264"

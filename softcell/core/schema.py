@@ -68,13 +68,24 @@ COORDINATES: dict[str, VariableSpec] = {
 CELL_COORDINATE = VariableSpec("cell", ("cell",), "i", "1", "cell index in the assembly")
 
 #: An assembly's domain: the side of its square box (NaN for the open plane), with its
-#: boundary (open, walls, periodic) as an attribute; and where each cell started.
+#: boundary (open, walls, periodic) as an attribute; and where each cell started (both per
+#: realization, so that the files of a sweep concatenate along it).
 DOMAIN_VARIABLES: dict[str, VariableSpec] = {
     v.name: v
     for v in (
-        VariableSpec("domain_box", (), "f", "cm", "side of the square box (NaN: the open plane)"),
-        VariableSpec("cell_start_x", ("cell",), "f", "cm", "cell starting center x coordinate"),
-        VariableSpec("cell_start_y", ("cell",), "f", "cm", "cell starting center y coordinate"),
+        VariableSpec(
+            "domain_box",
+            ("realization",),
+            "f",
+            "cm",
+            "side of the square box (NaN: the open plane)",
+        ),
+        VariableSpec(
+            "cell_start_x", ("realization", "cell"), "f", "cm", "cell starting center x coordinate"
+        ),
+        VariableSpec(
+            "cell_start_y", ("realization", "cell"), "f", "cm", "cell starting center y coordinate"
+        ),
     )
 }
 
@@ -644,10 +655,10 @@ def simulation_dataset(
     if domain is not None:
         cells = len(domain["start_x"])
         coords["cell"] = ("cell", np.arange(cells, dtype=np.int64), CELL_COORDINATE.cf_attrs())
-        for name, value, extra in (
-            ("domain_box", domain["box"], {"boundary": domain["boundary"]}),
-            ("cell_start_x", domain["start_x"], {}),
-            ("cell_start_y", domain["start_y"], {}),
+        for name, value, extra in (  # per realization: a sweep's files concatenate along it
+            ("domain_box", [domain["box"]], {"boundary": domain["boundary"]}),
+            ("cell_start_x", [domain["start_x"]], {}),
+            ("cell_start_y", [domain["start_y"]], {}),
         ):
             spec = DOMAIN_VARIABLES[name]
             data_vars[name] = (

@@ -215,6 +215,12 @@ class _Scene:
         from matplotlib.figure import Figure
 
         self.ds, self.panels, self.crowd, self.trail = ds, panels, crowd, trail
+        # an assembly's box (cm, NaN in the open plane; one value, though a combined sweep
+        # repeats it along the realizations) and its boundary
+        self.box, self.boundary = np.nan, "open"
+        if crowd and "domain_box" in ds:
+            self.box = float(np.asarray(ds["domain_box"].values).ravel()[0])
+            self.boundary = str(ds["domain_box"].attrs.get("boundary", "open"))
         attrs = ds.attrs
         self.a = float(attrs.get("parameter_bot_semi_major", 3.0))
         self.b = float(attrs.get("parameter_bot_semi_minor", 2.0))
@@ -257,8 +263,8 @@ class _Scene:
             x -= label.get_window_extent().width / self.size[0]
 
     def _window(self, r: int) -> tuple[float, float, float, float]:
-        if self.crowd and "domain_box" in self.ds and np.isfinite(float(self.ds["domain_box"])):
-            half = float(self.ds["domain_box"]) / 2 + 1
+        if np.isfinite(self.box):
+            half = self.box / 2 + 1
             return -half, half, -half, half
         x, y = self.mx[r], self.my[r]
         x0, x1, y0, y1 = np.nanmin(x), np.nanmax(x), np.nanmin(y), np.nanmax(y)
@@ -312,9 +318,9 @@ class _Scene:
         """The box's walls (or its periodic edges) and the obstacles."""
         from matplotlib.patches import Circle, Polygon
 
-        if self.crowd and "domain_box" in self.ds and np.isfinite(float(self.ds["domain_box"])):
-            half = float(self.ds["domain_box"]) / 2
-            walls = self.ds["domain_box"].attrs.get("boundary") == "walls"
+        if np.isfinite(self.box):
+            half = self.box / 2
+            walls = self.boundary == "walls"
             ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
                     color="k", lw=2.5 if walls else 0.8, ls="-" if walls else "--")  # fmt: skip
         text = str(self.ds.attrs.get("parameter_obstacles", "") or "")
@@ -333,8 +339,7 @@ class _Scene:
         m = int(np.argmin(np.abs(self.mt - t)))
         k = int(np.argmin(np.abs(self.t - t)))
         k0 = int(np.searchsorted(self.t, self.t[k] - self.trail))
-        box = float(self.ds["domain_box"]) if "domain_box" in self.ds else np.nan
-        periodic = self.crowd and self.ds["domain_box"].attrs.get("boundary") == "periodic"
+        box, periodic = self.box, self.boundary == "periodic"
         for panel, r in zip(self.artists, self.panels, strict=True):
             for c, art in enumerate(panel["cells"]):
                 shift = np.zeros(2)
