@@ -61,6 +61,20 @@ def _positive(name: str, value: float, unit: str) -> None:
         raise SoftcellError(f"{name} = {value} {unit} is not allowed: must be finite and > 0")
 
 
+def _check_request(path: Path, *, fps, speed, trail, height, crf) -> None:
+    """One line for a bad suffix or value (see :func:`animate` for the units)."""
+    if path.suffix.lower() not in FORMATS:
+        raise SoftcellError(
+            f"{path}: unknown movie format {path.suffix!r}; write .mp4 (H.264) or .gif"
+        )
+    for name, value, unit in (("fps", fps, "1/s"), ("speed", speed, ""), ("trail", trail, "s")):
+        _positive(name, float(value), unit)
+    if isinstance(height, bool) or not isinstance(height, int) or not 64 <= height <= 4096:
+        raise SoftcellError(f"height = {height!r} px is not allowed: 64 .. 4096")
+    if isinstance(crf, bool) or not isinstance(crf, int) or not 0 <= crf <= 51:
+        raise SoftcellError(f"crf = {crf!r} is not allowed: an integer 0 .. 51")
+
+
 def _panels(ds: xr.Dataset, realizations: list[int] | None) -> list[int]:
     count = ds.sizes["realization"]
     chosen = list(range(min(count, MAX_PANELS))) if realizations is None else realizations
@@ -145,16 +159,7 @@ def animate(
         an unknown suffix.
     """
     path = Path(out)
-    if path.suffix.lower() not in FORMATS:
-        raise SoftcellError(
-            f"{path}: unknown movie format {path.suffix!r}; write .mp4 (H.264) or .gif"
-        )
-    for name, value, unit in (("fps", fps, "1/s"), ("speed", speed, ""), ("trail", trail, "s")):
-        _positive(name, float(value), unit)
-    if isinstance(height, bool) or not isinstance(height, int) or not 64 <= height <= 4096:
-        raise SoftcellError(f"height = {height!r} px is not allowed: 64 .. 4096")
-    if isinstance(crf, bool) or not isinstance(crf, int) or not 0 <= crf <= 51:
-        raise SoftcellError(f"crf = {crf!r} is not allowed: an integer 0 .. 51")
+    _check_request(path, fps=fps, speed=speed, trail=trail, height=height, crf=crf)
     validate(ds)
     swept = [d for d in ds["bot_x"].dims if d not in ("realization", "time", "cell")]
     if swept:
