@@ -73,8 +73,11 @@ def test_report_states_what_ran_and_links_every_figure(results):
         "analysis",
         "video",
         "figures",
+        "figures_with_video",
         "report",
     }
+    timing = json.loads((out / "timing.json").read_text())
+    assert timing["beside"]["video"] > 0  # the video ran in its own process
     summary = json.loads((out / "findings.json").read_text())
     assert summary["seed"] == 4 and summary["design"] == "tiny"
     for row in summary["findings"]:

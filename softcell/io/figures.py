@@ -33,6 +33,12 @@ SIM_COLOR, EXP_COLOR = "#00acc1", "#fb8c00"  # cyan circles, orange triangles (F
 FORMATS = ("png", "pdf")
 
 
+#: Figures :func:`make_figures` may write, each in every format of :data:`FORMATS`.
+FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3", "figT")
+#: The figures that show a tracked video's markers.
+WITH_TRACKED = ("fig3", "fig4")
+
+
 @dataclass
 class FigureSet:
     """What :func:`softcell.make_figures` wrote.
@@ -47,6 +53,12 @@ class FigureSet:
 
     files: dict[str, list[Path]] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)
+
+    def update(self, other: FigureSet) -> None:
+        """Add ``other``'s files and skipped figures, in the order of :data:`FIGURES`."""
+        files, skipped = {**self.files, **other.files}, {**self.skipped, **other.skipped}
+        self.files = {k: files[k] for k in FIGURES if k in files}
+        self.skipped = {k: skipped[k] for k in FIGURES if k in skipped}
 
 
 def _figure(width: float, height: float):
@@ -592,9 +604,6 @@ def _metadata(fmt: str, name: str) -> dict[str, str]:
     }.get(fmt, {})
 
 
-#: Figures :func:`make_figures` may write, each in every format of :data:`FORMATS`.
-FIGURES = ("fig2", "fig3", "fig4", "figS1", "figS2", "figS3", "figT")
-
 #: What the figure of the velocity correlations (beyond the paper) reads; an analysis made
 #: before softcell 0.3 lacks it, and the figure is left out.
 THEORY_NEEDS = (
@@ -682,6 +691,7 @@ def make_figures(
     free_bot: xr.Dataset | None = None,
     tracked: xr.Dataset | None = None,
     formats: Sequence[str] = FORMATS,
+    only: Sequence[str] | None = None,
 ) -> FigureSet:
     """Draw every figure the inputs allow into ``out`` (``fig2.png``, ``fig2.pdf``, ...).
 
@@ -699,6 +709,8 @@ def make_figures(
         Folder the figures are written to (created if missing).
     formats : sequence of str
         File formats (matplotlib's names).
+    only : sequence of str, optional
+        Draw only these figures (of :data:`FIGURES`); by default every one.
 
     Returns
     -------
@@ -729,6 +741,11 @@ def make_figures(
             "needs the velocity autocorrelation (an analysis by softcell >= 0.3)",
         ),
     }
+    if only is not None:
+        unknown = sorted(set(only) - set(plans))
+        if unknown:
+            raise ValueError(f"no figure named {', '.join(unknown)}: the figures are {FIGURES}")
+        plans = {name: plan for name, plan in plans.items() if name in only}
     with atomic_files() as staging:  # the whole set, or nothing (a full disk)
         for name, (draw, missing, why) in plans.items():
             if missing:

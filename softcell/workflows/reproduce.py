@@ -19,7 +19,8 @@ Run again into the same directory with the same design, seed and version (``repr
 records them), it keeps every finished realization (as ``softcell simulate`` does), so an
 interrupted run resumes where it stopped; another design or seed stops before anything is
 computed (``overwrite`` recomputes). The
-analyses, the tracking, the figures and the report take seconds and are redone. Every
+analyses, the tracking, the figures and the report take seconds and are redone (the video
+pipeline in a process of its own, beside the analyses and the figures it does not mark). Every
 random stream derives from the one ``seed``: realization r of radius index p draws from
 ``SeedSequence(seed, spawn_key=(p, r))``; the free bot's realization r uses the stream of
 (0, r); the video's camera noise uses ``SeedSequence(seed, spawn_key=(VIDEO_STREAM,))``.
@@ -38,10 +39,14 @@ from typing import TYPE_CHECKING, Any
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
 from softcell.errors import SoftcellError
+from softcell.workflows.alongside import Alongside
 from softcell.workflows.experiment import VideoDesign, experimental_pipeline
 
 if TYPE_CHECKING:
+    import xarray as xr
+
     from softcell.core.components.registry import Registry
+    from softcell.io.figures import FigureSet
 
 RADII = tuple(float(r) for r in range(4, 14))
 
@@ -109,6 +114,8 @@ class Outcome:
     seed: int
     steps: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    #: Wall s of the video pipeline, which runs beside the analysis (inside its step).
+    video_alone: float | None = None
 
     @property
     def report(self) -> Path:
@@ -286,14 +293,10 @@ def reproduce(
     Outcome
         Paths and step timings; the report is ``out / "report.md"`` (and ``report.html``).
     """
-    from softcell.core.analysis import analyze
     from softcell.core.components.registry import default_registry
     from softcell.core.limits import check_seed
-    from softcell.io.figures import make_figures
     from softcell.io.files import atomic_write, check_output, check_writable
-    from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
     from softcell.workflows.cluster import check_scheduler, cluster_client
-    from softcell.workflows.contact import contact_summary
     from softcell.workflows.ensemble import simulate
     from softcell.workflows.report import write_report
 
@@ -323,7 +326,7 @@ def reproduce(
     say = log or (lambda _: None)
     options = {"discard": design.discard}
 
-    total = 5 if design.video is None else 6
+    total = 5 if design.video is None else 7
 
     def step(name: str, what: str):
         say(f"[{len(outcome.steps) + 1}/{total}] {what}")
@@ -359,50 +362,9 @@ def reproduce(
                 log=say,
                 registry=registry,
             )
-    with step("analysis", "analysing the sweep and the free bot"):
-        # One dask chunk per file: the analysis holds one radius in memory at a time.
-        analysis = analyze(
-            open_dataset(out / "simulations", chunks={}),
-            options,
-            progress=progress,
-            registry=registry,
-        )
-        write_dataset(analysis, out / "analysis.nc")
-        free_analysis = analyze(open_dataset(out / "free_bot"), options, registry=registry)
-        write_dataset(free_analysis, out / "free_bot_analysis.nc")
-        # The membrane's reaction on the bot (the paper's steering mechanism), per radius.
-        write_dataset(
-            contact_summary(out / "simulations", discard=design.discard, registry=registry),
-            out / "contact.nc",
-        )
-    video = tracked = None
-    if design.video is not None:
-        with step(
-            "video",
-            f"rendering, tracking and analysing {design.video.span:g} s at "
-            f"R = {design.video.radius:g} cm",
-        ):
-            task = _filmed_task(design, out, seed, registry)
-            video = experimental_pipeline(
-                Path(task.path),
-                out / "video",
-                design.video,
-                discard=design.discard,
-                seed=seed,
-                progress=progress,
-            )
-            video["source"] = str(Path(task.path).relative_to(out))
-            outcome.notes.extend(video.pop("notes"))
-        tracked = read_dataset(out / "video" / "tracked_analysis.nc")
-    with step("figures", "drawing the figures"):
-        figures = make_figures(
-            read_dataset(out / "analysis.nc"),
-            out / "figures",
-            simulations=open_dataset(out / "simulations", chunks={}),
-            free_bot=read_dataset(out / "free_bot_analysis.nc"),
-            tracked=tracked,
-        )
-        outcome.notes.extend(f"{name} not drawn: {why}" for name, why in figures.skipped.items())
+    figures, video = _analyses_video_figures(
+        out, design, seed, options, progress, registry, outcome, step
+    )
     with step("report", "writing the report"):
         write_report(
             out,
@@ -422,6 +384,110 @@ def reproduce(
 TIMING = "timing.json"
 
 
+def _analyses_video_figures(
+    out: Path,
+    design: Design,
+    seed: int,
+    options: dict[str, Any],
+    progress: bool,
+    registry: Registry,
+    outcome: Outcome,
+    step: Callable[[str, str], _Timer],
+) -> tuple[FigureSet, dict[str, Any] | None]:
+    """The analyses, the figures and the video pipeline. The video (one core's work) runs
+    in a process of its own from the analyses on; the figures that do not show its markers
+    are drawn while it runs, Fig. 3 and 4 after it."""
+    from softcell.io.figures import WITH_TRACKED, FigureSet
+    from softcell.io.netcdf import read_dataset
+
+    figures, video = FigureSet(), None
+    with contextlib.ExitStack() as stack:
+        filming, what = None, "analysing the sweep and the free bot"
+        if design.video is not None:
+            task = _filmed_task(design, out, seed, registry)
+            filming = stack.enter_context(
+                Alongside(
+                    experimental_pipeline,
+                    Path(task.path),
+                    out / "video",
+                    design.video,
+                    discard=design.discard,
+                    seed=seed,
+                )
+            )
+            what += (
+                f"; beside it, rendering, tracking and analysing {design.video.span:g} s "
+                f"at R = {design.video.radius:g} cm"
+            )
+        with step("analysis", what):
+            _analyses(out, design, options, progress, registry)
+        if filming is None:
+            with step("figures", "drawing the figures"):
+                figures.update(_figures(out, None))
+            return _skipped(figures, outcome), None
+        with step("figures", "drawing the figures without the video's markers"):
+            figures.update(_figures(out, None, exclude=WITH_TRACKED))
+        with step("video", "waiting for the video pipeline"):
+            video = filming.result()
+        outcome.video_alone = filming.seconds
+        video["source"] = str(Path(task.path).relative_to(out))
+        outcome.notes.extend(video.pop("notes"))
+    tracked = read_dataset(out / "video" / "tracked_analysis.nc")
+    with step("figures_with_video", "drawing Fig. 3 and 4 with the tracked video's markers"):
+        figures.update(_figures(out, tracked, only=WITH_TRACKED))
+    return _skipped(figures, outcome), video
+
+
+def _figures(
+    out: Path,
+    tracked: xr.Dataset | None,
+    only: tuple[str, ...] | None = None,
+    exclude: tuple[str, ...] = (),
+) -> FigureSet:
+    from softcell.io.figures import FIGURES, make_figures
+    from softcell.io.netcdf import open_dataset, read_dataset
+
+    names = [n for n in (only or FIGURES) if n not in exclude]
+    return make_figures(
+        read_dataset(out / "analysis.nc"),
+        out / "figures",
+        simulations=open_dataset(out / "simulations", chunks={}),
+        free_bot=read_dataset(out / "free_bot_analysis.nc"),
+        tracked=tracked,
+        only=names,
+    )
+
+
+def _skipped(figures: FigureSet, outcome: Outcome) -> FigureSet:
+    outcome.notes.extend(f"{name} not drawn: {why}" for name, why in figures.skipped.items())
+    return figures
+
+
+def _analyses(
+    out: Path, design: Design, options: dict[str, Any], progress: bool, registry: Registry
+) -> None:
+    """The sweep's and the free bot's analyses and the membrane's reaction on the bot."""
+    from softcell.core.analysis import analyze
+    from softcell.io.netcdf import open_dataset, write_dataset
+    from softcell.workflows.contact import contact_summary
+
+    # One dask chunk per file: the analysis holds one radius in memory at a time.
+    analysis = analyze(
+        open_dataset(out / "simulations", chunks={}),
+        options,
+        progress=progress,
+        registry=registry,
+    )
+    write_dataset(analysis, out / "analysis.nc")
+    free_analysis = analyze(open_dataset(out / "free_bot"), options, registry=registry)
+    write_dataset(free_analysis, out / "free_bot_analysis.nc")
+    # The membrane's reaction on the bot (the paper's steering mechanism), per radius.
+    write_dataset(
+        contact_summary(out / "simulations", discard=design.discard, registry=registry),
+        out / "contact.nc",
+    )
+
+
 def _write_timing(out: Path, outcome: Outcome, workers: int | None) -> None:
     """``timing.json``: this invocation's wall seconds per step and in all, and the peak
     resident memory of this process and of its largest worker process (MiB)."""
@@ -439,6 +505,8 @@ def _write_timing(out: Path, outcome: Outcome, workers: int | None) -> None:
         "design": outcome.design.name,
         "steps": {k: round(v, 1) for k, v in outcome.steps.items()},
         "total": round(sum(outcome.steps.values()), 1),
+        # The video pipeline, in its own process from the analysis on (within the steps).
+        "beside": ({} if outcome.video_alone is None else {"video": round(outcome.video_alone, 1)}),
         "peak_rss_mib": {
             "this_process": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / mib),
             "largest_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / mib),
