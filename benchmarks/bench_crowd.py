@@ -3,7 +3,8 @@
 - the overhead of the assembly loop: one cell as an assembly against the single-cell run,
   the same realization, interleaved, medians of 3 (target: within 10 %);
 - 16 cells at an area fraction of 0.35 in a periodic box, 100 simulated seconds on one core
-  (target: 5 minutes);
+  (target: 5 minutes), and the analysis of that run (each cell and the crowd, samples 1 s
+  apart);
 - wall time per simulated second for 4, 16 and 64 cells at that area fraction (10 simulated
   seconds each; target: 64 cells at most 4.8 times 16 cells, i.e. 1.2 times linear);
 - memory per cell: the record of 100 simulated seconds (the membrane every 0.01 s as 33 modes,
@@ -42,9 +43,15 @@ def _built(duration: float):
 
 
 def _crowd(cells: int, duration: float, seed: int = 0) -> tuple[float, object]:
-    """Wall seconds of one realization of ``cells`` cells at FRACTION in a periodic box."""
-    from softcell.core.assembly import Domain, place_cells
-    from softcell.core.crowd import cell_rngs, placement_rng, run_assembly
+    """Wall seconds of one realization of ``cells`` cells at FRACTION in a periodic box, and
+    its record."""
+    wall, record, _ = _crowd_run(cells, duration, seed)
+    return wall, record
+
+
+def _crowd_run(cells: int, duration: float, seed: int = 0):
+    from softcell.core.assembly import Assembly, Domain, place_cells
+    from softcell.core.crowd import cell_rngs, crowd_dataset, placement_rng, run_assembly
 
     model, stepper = _built(duration)
     box = math.sqrt(cells * math.pi * RADIUS**2 / FRACTION)
@@ -52,7 +59,25 @@ def _crowd(cells: int, duration: float, seed: int = 0) -> tuple[float, object]:
     centres = place_cells(cells, RADIUS, domain, placement_rng(seed, 0, 0))
     start = time.perf_counter()
     record = run_assembly(model, stepper, domain, centres, cell_rngs(seed, 0, 0, cells))
-    return time.perf_counter() - start, record
+    wall = time.perf_counter() - start
+
+    def dataset():
+        assembly = Assembly(cells=cells, boundary="periodic", box=box)
+        return crowd_dataset(
+            record, model, assembly, centres, realization=0, seed=seed, components={}
+        )
+
+    return wall, record, dataset
+
+
+def _analysis(dataset) -> float:
+    """Wall seconds of the analysis of an assembly's realization (options as the docs')."""
+    import softcell
+
+    ds = dataset()
+    start = time.perf_counter()
+    softcell.analyze(ds, {"discard": 15.0, "crowd_every": 1.0})
+    return time.perf_counter() - start
 
 
 def _overhead(duration: float = 60.0, rounds: int = 3) -> float:
@@ -86,7 +111,8 @@ def rows() -> list[dict[str, object]]:
         }
     ]
     _crowd(4, 0.1)  # compile the group loop outside the timings
-    wall, record = _crowd(16, 100.0)
+    wall, record, dataset = _crowd_run(16, 100.0)
+    analysis = _analysis(dataset)
     out.append(
         {
             "benchmark": "16 cells, 100 s, phi = 0.35",
@@ -95,6 +121,15 @@ def rows() -> list[dict[str, object]]:
             "target": 300.0,
             "note": f"periodic box, one core; {record.statistics['grouped_intervals']} group "
             "intervals",
+        }
+    )
+    out.append(
+        {
+            "benchmark": "its analysis (each cell, the crowd)",
+            "value": analysis,
+            "unit": "s",
+            "target": None,
+            "note": f"{analysis / wall:.1%} of the simulation; samples 1 s apart",
         }
     )
     per_cell = (record.modes.nbytes + record.fine_pose.nbytes + record.fine_center.nbytes) / 16

@@ -648,9 +648,10 @@ def _add_cluster_flags(parser: argparse.ArgumentParser, workers_help: str) -> No
 
 
 def _describe(ds: Any) -> str:
-    swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
+    swept = [d for d in ds["cell_x"].dims if d not in ("realization", "time", "cell")]
     points = " x ".join(f"{ds.sizes[d]} {d}" for d in swept)
-    return f"{ds.sizes['realization']} realization(s)" + (f" at {points}" if points else "")
+    cells = f" of {ds.sizes['cell']} cells" if "cell" in ds.dims else ""
+    return f"{ds.sizes['realization']} realization(s){cells}" + (f" at {points}" if points else "")
 
 
 def _add_plugins(p: argparse.ArgumentParser, strict: bool, specs) -> None:
@@ -770,6 +771,7 @@ def _add_simulate(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 
 
 def _add_analyze(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    from softcell.core.analysis.crowd import CROWD_OPTIONS
     from softcell.core.analysis.options import ANALYSIS_OPTIONS
 
     p.add_argument(
@@ -796,6 +798,13 @@ def _add_analyze(p: argparse.ArgumentParser, strict: bool, specs) -> None:
         list(ANALYSIS_OPTIONS.values()),
         "analysis options",
         "see docs/analysis.md; stored in the output file",
+    )
+    _add_parameter_flags(
+        p,
+        list(CROWD_OPTIONS.values()),
+        "assembly options",
+        "what many cells do together: clusters, g(r), Voronoi (docs/analysis.md); an error "
+        "for a file of one cell",
     )
     _add_parameter_flags(
         p,

@@ -2,16 +2,18 @@
 
     python docs/beyond/crowd.py -o docs/beyond [--runs DIR]
 
-Simulates (into DIR, default a temporary folder), with root seed 0 and one realization each:
+Simulates (into DIR, default a temporary folder), with root seed 0:
 
 - a crowd: 16 rings of R = 5 cm at an area fraction of 0.35 in a periodic box of side 59.9 cm,
-  from a square lattice, for 60 s;
+  from a square lattice, for 60 s, three realizations (the frames show realization 0);
 - a corral: 8 rings of R = 5 cm in a walled box of side 44 cm around a post of radius 4 cm at
   its centre, placed at random at least 0.5 cm apart, for 60 s.
 
-Writes ``crowd.png`` (four frames of each) and ``crowd.json`` (per run: the cells' mean
-displacement over the run, the deepest any membrane point went into another ring
-and into the post, in contact lengths).
+Writes ``crowd.png`` (four frames of each), ``crowd_analysis.png`` (the crowd's analysis:
+the bots' polar order, g(r), cluster sizes, the shape index against the local area fraction)
+and ``crowd.json`` (per run: the cells' mean displacement over realization 0, the deepest
+any membrane point went into another ring and into the post, in contact lengths; for the
+crowd, the analysis' numbers with standard errors across the realizations).
 """
 
 from __future__ import annotations
@@ -35,13 +37,84 @@ CORRAL = {"cells": 8, "box": 44.0, "boundary": "walls", "placement": "random", "
 FRAMES = (0.0, 20.0, 40.0, 60.0)
 
 
-def run(folder: Path, assembly: dict, obstacles: str = "") -> Path:
+CROWD_REALIZATIONS = 3
+ANALYSIS = {"discard": 5.0, "crowd_every": 0.5}
+
+
+def run(folder: Path, assembly: dict, obstacles: str = "", realizations: int = 1) -> Path:
     parameters = {"radius": RADIUS, "duration": DURATION}
     if obstacles:
         parameters["obstacles"] = obstacles
     config = with_obstacle_term(RunConfig(parameters=parameters, assembly=assembly))
-    softcell.simulate(config, folder, seed=SEED)
+    softcell.simulate(config, folder, seed=SEED, realizations=realizations)
     return folder
+
+
+def _mean_and_error(values: np.ndarray) -> list[float]:
+    """Mean over realizations (leading axis, each first averaged over the rest) and its
+    standard error."""
+    per = values.reshape(values.shape[0], -1).mean(axis=1)
+    return [round(float(per.mean()), 3), round(float(per.std(ddof=1) / math.sqrt(per.size)), 3)]
+
+
+def crowd_analysis(ds, out: Path) -> dict:
+    """The crowd's analysis: a figure and its numbers."""
+    import matplotlib.pyplot as plt
+
+    a = softcell.analyze(ds, ANALYSIS)
+    cells = int(ds.sizes["cell"])
+    independent = math.sqrt(math.pi) / 2 / math.sqrt(cells)  # E|mean of M random headings|
+    g, g_err = a["pair_correlation"].values, a["pair_correlation_error"].values
+    r = a["pair_distance"].values
+    peak = int(np.nanargmax(g))
+    numbers = {
+        "realizations": int(ds.sizes["realization"]),
+        "polar_order": _mean_and_error(a["polar_order"].values),
+        "polar_order_independent_headings": round(independent, 3),
+        "mean_cluster_size": _mean_and_error(a["mean_cluster_size"].values),
+        "largest_cluster": _mean_and_error(a["largest_cluster"].values),
+        "pair_correlation_peak": [round(float(g[peak]), 2), round(float(g_err[peak]), 2)],
+        "pair_correlation_peak_at_2R": round(float(r[peak]), 3),
+        "neighbour_exchange_rate_per_s": _mean_and_error(a["neighbour_exchange_rate"].values),
+        "local_area_fraction": _mean_and_error(a["local_area_fraction"].values),
+    }
+    fig, axes = plt.subplots(1, 4, figsize=(12, 3.1), layout="constrained")
+    ax = axes[0]
+    for i in range(a.sizes["realization"]):
+        ax.plot(a["time"], a["polar_order"].isel(realization=i), lw=0.8, label=f"realization {i}")
+    ax.axhline(independent, color="k", ls="--", lw=0.8, label="independent headings")
+    ax.set(xlabel="time (s)", ylabel="polar order of the bots (1)", ylim=(0, 1))
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    ax.errorbar(r, g, yerr=g_err, fmt="o-", ms=2.5, lw=0.8, capsize=2)
+    ax.axhline(1.0, color="k", ls="--", lw=0.8)
+    ax.set(xlabel="centre distance r / 2R (1)", ylabel="pair correlation g(r) (1)")
+    ax = axes[2]
+    size = a["cluster_size"].values
+    ax.bar(size, a["cluster_size_fraction"].values, color="tab:blue")
+    ax.set(xlabel="cluster size (cells in contact)", ylabel="fraction of cells (1)")
+    ax = axes[3]
+    count = a["shape_index_by_density_count"].values
+    shown = count >= 10
+    ax.errorbar(
+        a["area_fraction_bin"].values[shown],
+        a["shape_index_by_density"].values[shown],
+        yerr=a["shape_index_by_density_error"].values[shown],
+        fmt="o",
+        ms=3,
+        capsize=2,
+    )
+    ax.axhline(2 * math.sqrt(math.pi), color="k", ls="--", lw=0.8, label=r"circle, $2\sqrt{\pi}$")
+    ax.set(xlabel="local area fraction (1)", ylabel="shape index P / sqrt(A) (1)")
+    ax.legend(fontsize=7)
+    fig.suptitle(
+        f"{cells} cells of R = 5 cm at an area fraction of 0.35 (periodic box), "
+        f"{numbers['realizations']} realizations of 60 s, from {ANALYSIS['discard']:g} s, "
+        "samples 0.5 s apart; error bars: standard errors across realizations",
+        fontsize=9,
+    )
+    fig.savefig(out / "crowd_analysis.png", dpi=110)
+    return numbers
 
 
 def _segment_distances(points: np.ndarray, ring: np.ndarray) -> np.ndarray:
@@ -169,7 +242,7 @@ def main(argv: list[str] | None = None) -> None:
     import matplotlib.pyplot as plt
 
     runs = args.runs or Path(tempfile.mkdtemp(prefix="softcell-crowd-"))
-    crowd = run(runs / "crowd", CROWD)
+    crowd = run(runs / "crowd", CROWD, realizations=CROWD_REALIZATIONS)
     corral = run(runs / "corral", CORRAL, POST)
     ds_crowd, ds_corral = softcell.open_dataset(crowd), softcell.open_dataset(corral)
     numbers = {
@@ -193,6 +266,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     args.output.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.output / "crowd.png", dpi=110)
+    numbers["crowd"]["analysis"] = crowd_analysis(ds_crowd, args.output)
     (args.output / "crowd.json").write_text(json.dumps(numbers, indent=2) + "\n")
     print(json.dumps(numbers, indent=2))
 

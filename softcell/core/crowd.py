@@ -37,7 +37,7 @@ from softcell.core.engine.state import (
     sampling_plan,
 )
 from softcell.core.interrupt import received
-from softcell.core.realization import SAMPLES_PER_CALL, Checkpoint, Saved
+from softcell.core.realization import SAMPLES_PER_CALL, Checkpoint, SampleGrid, Saved
 from softcell.errors import Interrupted, ParameterError
 
 #: Extra reach (cm) of the groups formed before an interval, besides the contact's cut-off
@@ -254,7 +254,7 @@ class _Crowd:
         rows = slice(first, stop)
         for c in np.flatnonzero(free):
             modes, pose = self.stepper.sample(self.states[c], self.schedules[c], times[rows])
-            grid.keep(rows, int(c), modes, pose)
+            grid.keep_cell(rows, int(c), modes, pose)
             self.free_chunks += 1
         self.together = {}  # groups start afresh in each chunk (a checkpoint's boundary)
         busy = np.flatnonzero(~free)
@@ -264,7 +264,7 @@ class _Crowd:
             self.advance(busy, float(times[i]), float(times[i] - times[i - 1]))
             for c in busy:
                 s = self.states[c]
-                grid.keep(slice(i, i + 1), int(c), s["modes"][None], s["pose"][None])
+                grid.keep_cell(slice(i, i + 1), int(c), s["modes"][None], s["pose"][None])
 
     def advance(self, members: np.ndarray, t_end: float, dt: float) -> None:
         """Advance the cells ``members`` to ``t_end`` (s), redoing the interval if groups
@@ -306,20 +306,24 @@ class _Crowd:
         self.together = together
 
 
-class _Samples:
-    """An assembly's record on its sampling grid (membrane samples and the fine record's
-    times together), filled cell by cell."""
+class _Samples(SampleGrid):
+    """An assembly's record on its sampling grid: a cell axis after the sample axis, filled
+    cell by cell; a checkpoint stacks every cell's state."""
 
-    def __init__(self, times, membrane, cells: int, cutoff: int):
-        m = 2 * cutoff + 1
-        self.times, self.membrane, self.cutoff = times, membrane, cutoff
-        self.modes = np.empty((membrane.size, cells, m), dtype=np.complex128)
-        self.center = np.empty((times.size, cells), dtype=np.complex128)
-        self.pose = np.empty((times.size, cells, 3))
+    def __init__(self, times, membrane, fine, cells: int, cutoff: int):
+        super().__init__(
+            times,
+            membrane,
+            fine,
+            np.empty((membrane.size, cells, 2 * cutoff + 1), dtype=np.complex128),
+            np.empty((times.size, cells, 3)),
+            np.empty((times.size, cells), dtype=np.complex128),
+        )
+        self.cutoff = cutoff
         self.slot = np.full(times.size, -1)
         self.slot[membrane] = np.arange(membrane.size)
 
-    def keep(self, rows: slice, cell: int, modes: np.ndarray, pose: np.ndarray) -> None:
+    def keep_cell(self, rows: slice, cell: int, modes: np.ndarray, pose: np.ndarray) -> None:
         """Cell ``cell``'s samples of grid rows ``rows``: modes (K, m), pose (K, 3)."""
         self.pose[rows, cell] = pose
         self.center[rows, cell] = modes[:, self.cutoff]
@@ -327,28 +331,16 @@ class _Samples:
         kept = slots >= 0
         self.modes[slots[kept], cell] = modes[kept]
 
-    def membrane_before(self, sample: int) -> int:
-        return int(np.searchsorted(self.membrane, sample))
-
-    def saved(self, sample: int, states: list[dict[str, np.ndarray]]) -> Saved:
+    def saved_cells(self, sample: int, states: list[dict[str, np.ndarray]]) -> Saved:
         """What a checkpoint keeps at grid sample ``sample`` (every cell's state stacked)."""
-        stacked = {k: np.stack([s[k] for s in states]) for k in states[0]}
-        return Saved(
-            sample,
-            self.modes[: self.membrane_before(sample)],
-            self.pose[:sample],
-            stacked,
-            self.center[:sample],
-        )
+        return self.saved(sample, {k: np.stack([s[k] for s in states]) for k in states[0]})
 
-    def restore(self, saved: Saved, states: list[dict[str, np.ndarray]]) -> int:
-        first = saved.next_sample
-        self.modes[: self.membrane_before(first)] = saved.modes_record
-        self.pose[:first], self.center[:first] = saved.pose_record, saved.center_record
+    def restore_cells(self, saved: Saved, states: list[dict[str, np.ndarray]]) -> int:
+        self.restore(saved)
         for c, state in enumerate(states):
             for k, v in saved.state.items():
                 state[k][...] = v[c]
-        return first
+        return saved.next_sample
 
 
 def _copies(states: list[dict[str, np.ndarray]]) -> list[dict[str, np.ndarray]]:
@@ -401,7 +393,7 @@ def run_assembly(
     states, schedules = start_cells(model, stepper, centres, rngs)
     crowd = _Crowd(model, stepper, domain, states, schedules)
     cells = len(states)
-    grid = _Samples(times, membrane, cells, model.cutoff)
+    grid = _Samples(times, membrane, fine, cells, model.cutoff)
     first = _start(model, states, grid, checkpoint, label, progress)
     chunk = SAMPLES_PER_CALL if cells == 1 else CHUNK
     done, done_states, last_save = first, _copies(states), time.monotonic()
@@ -418,13 +410,13 @@ def run_assembly(
             if progress:
                 progress(float(times[j - 1] - times[i - 1]))
             if checkpoint is not None and time.monotonic() - last_save > checkpoint_every:
-                checkpoint.save(grid.saved(j, states))
+                checkpoint.save(grid.saved_cells(j, states))
                 last_save = time.monotonic()
             if received() or (stop is not None and stop()):
                 raise KeyboardInterrupt
     except KeyboardInterrupt:
         if checkpoint is not None:
-            checkpoint.save(grid.saved(done, done_states))
+            checkpoint.save(grid.saved_cells(done, done_states))
         raise Interrupted(
             f"interrupted at t = {times[done - 1]:.2f} s of {label}"
             + ("; rerun the same command to resume" if checkpoint else "")
@@ -441,9 +433,9 @@ def _start(model, states, grid: _Samples, checkpoint, label, progress) -> int:
     if saved is None:
         for c, s in enumerate(states):
             check_state(s, model, f"{label}, cell {c}")
-            grid.keep(slice(0, 1), c, s["modes"][None], s["pose"][None])
+            grid.keep_cell(slice(0, 1), c, s["modes"][None], s["pose"][None])
         return 1
-    first = grid.restore(saved, states)
+    first = grid.restore_cells(saved, states)
     if progress:
         progress(float(grid.times[first - 1]))
     return first

@@ -68,8 +68,9 @@ class Checkpoint(Protocol):
 
 
 @dataclass
-class _Grid:
-    """The samples of one realization on its sampling grid (see :class:`Saved`)."""
+class SampleGrid:
+    """The samples of one realization on its sampling grid (see :class:`Saved`); an
+    assembly's (:mod:`softcell.core.crowd`) have a cell axis after the first."""
 
     times: np.ndarray  # float64[G], s
     membrane: np.ndarray  # int64[T]: grid index of each membrane sample
@@ -138,7 +139,7 @@ def run_realization(
     times, membrane, fine = sampling_plan(model.params)
     modes, pose, schedule = initial_state(model, rng)
     state = stepper.start(modes, pose, schedule)
-    grid = _Grid(
+    grid = SampleGrid(
         times,
         membrane,
         fine,
@@ -194,7 +195,7 @@ def run_realization(
 
 
 def _restored(
-    checkpoint: Checkpoint | None, grid: _Grid, state: dict[str, np.ndarray]
+    checkpoint: Checkpoint | None, grid: SampleGrid, state: dict[str, np.ndarray]
 ) -> tuple[int, dict[str, np.ndarray]]:
     """The first grid sample still to compute and the state to compute it from: the
     checkpoint's (its samples copied into ``grid``), or 0 and ``state``."""
@@ -210,7 +211,7 @@ def _sample_checked(
     stepper: Stepper,
     state: dict[str, np.ndarray],
     schedule: Schedule,
-    grid: _Grid,
+    grid: SampleGrid,
     chunk: slice,
     label: object,
 ) -> None:

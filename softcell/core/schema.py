@@ -154,6 +154,114 @@ FINE_VARIABLES: dict[str, VariableSpec] = {
 #: dims.
 SWEEP = "..."
 
+#: What an assembly's analysis adds to the per-cell variables (softcell.core.analysis.crowd):
+#: coordinates, then the collective variables, with a sweep's dims in front.
+CROWD_COORDINATES: dict[str, VariableSpec] = {
+    v.name: v
+    for v in (
+        VariableSpec(
+            "crowd_time", ("crowd_time",), "f", "s", "time of the collective statistics' samples"
+        ),
+        VariableSpec("cluster_size", ("cluster_size",), "i", "1", "cells in a cluster"),
+        VariableSpec(
+            "pair_distance",
+            ("pair_distance",),
+            "f",
+            "1",
+            "distance between cell centres over the cell diameter 2 R, bin center",
+        ),
+        VariableSpec(
+            "area_fraction_bin",
+            ("area_fraction_bin",),
+            "f",
+            "1",
+            "local area fraction (cell area over its Voronoi cell's), bin center",
+        ),
+    )
+}
+CROWD_VARIABLES: dict[str, VariableSpec] = {
+    v.name: v
+    for v in (
+        VariableSpec(
+            "polar_order",
+            (SWEEP, "realization", "time"),
+            "f",
+            "1",
+            "polar order of the bots' headings, |mean of (cos, sin)| over cells",
+        ),
+        VariableSpec(
+            "largest_cluster",
+            (SWEEP, "realization", "crowd_time"),
+            "f",
+            "1",
+            "cells in the largest cluster of cells in contact",
+        ),
+        VariableSpec(
+            "mean_cluster_size",
+            (SWEEP, "realization", "crowd_time"),
+            "f",
+            "1",
+            "mean size of the cluster a cell belongs to (sum of s^2 over sum of s)",
+        ),
+        VariableSpec(
+            "cluster_size_fraction",
+            (SWEEP, "cluster_size"),
+            "f",
+            "1",
+            "fraction of cells in clusters of this size, pooled over samples and realizations",
+        ),
+        VariableSpec(
+            "pair_correlation",
+            (SWEEP, "pair_distance"),
+            "f",
+            "1",
+            "pair correlation g(r) of cell centres, pooled over samples and realizations",
+        ),
+        VariableSpec(
+            "pair_correlation_error",
+            (SWEEP, "pair_distance"),
+            "f",
+            "1",
+            "standard error of g(r) across realizations",
+        ),
+        VariableSpec(
+            "local_area_fraction",
+            (SWEEP, "realization", "crowd_time", "cell"),
+            "f",
+            "1",
+            "cell area over the area of its Voronoi cell (periodic box)",
+        ),
+        VariableSpec(
+            "shape_index_by_density",
+            (SWEEP, "area_fraction_bin"),
+            "f",
+            "1",
+            "mean shape index P / sqrt(A) of cells at this local area fraction",
+        ),
+        VariableSpec(
+            "shape_index_by_density_error",
+            (SWEEP, "area_fraction_bin"),
+            "f",
+            "1",
+            "standard error across realizations of the shape index per area-fraction bin",
+        ),
+        VariableSpec(
+            "shape_index_by_density_count",
+            (SWEEP, "area_fraction_bin"),
+            "i",
+            "1",
+            "cell samples per area-fraction bin",
+        ),
+        VariableSpec(
+            "neighbour_exchange_rate",
+            (SWEEP, "realization"),
+            "f",
+            "s-1",
+            "Voronoi neighbour bonds lost per cell per second between crowd samples",
+        ),
+    )
+}
+
 #: The analysis Dataset's variables, in the order they are written (:func:`analyze` fills
 #: them; ``flag_values`` of the two coded variables are the codes above). Over a radius sweep
 #: it also holds the scaling-collapse variables along ``collapse_variant``.

@@ -271,7 +271,6 @@ def run_task(
         Where the components are looked up; on a cluster's worker, the built-ins and the
         installed plugins of that worker.
     """
-    from softcell.io.netcdf import write_dataset
 
     if registry is None:
         with warnings.catch_warnings():  # the command that planned the run has warned already
@@ -280,37 +279,58 @@ def run_task(
     model, stepper = _model_and_stepper(task, registry)
     if task.assembly is not None:
         return _run_assembly(task, model, stepper, progress, checkpoint_every, stoppable)
-    path = Path(task.path)
-    checkpoint = checkpoint_path(path)
-    stop_file = path.parent / STOP_FILE
-    try:
-        record = run_realization(
+    return _run_and_write(
+        task,
+        stoppable,
+        lambda checkpoint, stop: run_realization(
             model,
             stepper,
             realization_rng(task.seed, task.point, task.realization),
             label=task.name,
-            checkpoint=FileCheckpoint(checkpoint, canonical(task.request())),
+            checkpoint=checkpoint,
             checkpoint_every=checkpoint_every,
             progress=progress,
-            stop=stop_file.exists if stoppable else None,
+            stop=stop,
+        ),
+        lambda record, stored: record_dataset(record, model, **stored),
+    )
+
+
+def _run_and_write(
+    task: Task,
+    stoppable: bool,
+    run: Callable[[FileCheckpoint, Callable[[], bool] | None], Any],
+    dataset: Callable[[Any, dict[str, Any]], Any],
+) -> str | None:
+    """``run(checkpoint, stop)``'s record, made a Dataset by ``dataset(record, stored)``
+    (``stored``: the realization, seed, components, attributes and scalar coordinates every
+    file carries), written atomically to the task's path; its checkpoint is then removed.
+    Returns the path, or None when asked to stop (the checkpoint is saved)."""
+    from softcell.io.netcdf import write_dataset
+
+    path = Path(task.path)
+    checkpoint = checkpoint_path(path)
+    stop_file = path.parent / STOP_FILE
+    try:
+        record = run(
+            FileCheckpoint(checkpoint, canonical(task.request())),
+            stop_file.exists if stoppable else None,
         )
     except Interrupted:
         if not stoppable:
             raise
-        return None  # asked to stop: the checkpoint is saved
-    ds = record_dataset(
-        record,
-        model,
-        realization=task.realization,
-        seed=task.seed,
-        components=task.stored_components,
-        extra_attrs={
+        return None
+    stored = {
+        "realization": task.realization,
+        "seed": task.seed,
+        "components": task.stored_components,
+        "extra_attrs": {
             "softcell_point": task.point,
             "softcell_spawn_key": f"{task.point},{task.realization}",
         },
-        scalar_coords=task.swept,
-    )
-    write_dataset(ds, path)
+        "scalar_coords": task.swept,
+    }
+    write_dataset(dataset(record, stored), path)
     checkpoint.unlink(missing_ok=True)
     return str(path)
 
@@ -327,46 +347,25 @@ def _run_assembly(
     single cell's realization does."""
     from softcell.core.assembly import Assembly
     from softcell.core.crowd import crowd_dataset, run_assembly, starting_centres
-    from softcell.io.netcdf import write_dataset
 
     assembly = Assembly(**task.assembly)
-    path = Path(task.path)
-    checkpoint = checkpoint_path(path)
-    stop_file = path.parent / STOP_FILE
     centres = starting_centres(
         model.params, assembly, task.seed, task.point, task.realization, model.pair_reach
     )
-    try:
-        record = run_assembly(
+    return _run_and_write(
+        task,
+        stoppable,
+        lambda checkpoint, stop: run_assembly(
             model,
             stepper,
             assembly.domain,
             centres,
             cell_rngs(task.seed, task.point, task.realization, assembly.cells),
             label=task.name,
-            checkpoint=FileCheckpoint(checkpoint, canonical(task.request())),
+            checkpoint=checkpoint,
             checkpoint_every=checkpoint_every,
             progress=(lambda dt: progress(dt * assembly.cells)) if progress else None,
-            stop=stop_file.exists if stoppable else None,
-        )
-    except Interrupted:
-        if not stoppable:
-            raise
-        return None
-    ds = crowd_dataset(
-        record,
-        model,
-        assembly,
-        centres,
-        realization=task.realization,
-        seed=task.seed,
-        components=task.stored_components,
-        extra_attrs={
-            "softcell_point": task.point,
-            "softcell_spawn_key": f"{task.point},{task.realization}",
-        },
-        scalar_coords=task.swept,
+            stop=stop,
+        ),
+        lambda record, stored: crowd_dataset(record, model, assembly, centres, **stored),
     )
-    write_dataset(ds, path)
-    checkpoint.unlink(missing_ok=True)
-    return str(path)

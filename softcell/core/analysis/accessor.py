@@ -69,7 +69,9 @@ class SoftcellAccessor:
         """
         from softcell.core.analysis.series import speed
 
-        x, y = self._ds[f"{self._check(body)}_x"], self._ds[f"{body}_y"]
+        # Time last (an assembly stores its cell dim after time).
+        x = self._ds[f"{self._check(body)}_x"].transpose(..., "time")
+        y = self._ds[f"{body}_y"].transpose(..., "time")
         values = speed(x.values, y.values, self._ds["time"].values)
         return xr.DataArray(
             values,
@@ -77,7 +79,7 @@ class SoftcellAccessor:
             coords=x.coords,
             name=f"{body}_speed",
             attrs={"units": "cm s-1", "long_name": f"{body} speed"},
-        )
+        ).transpose(*self._ds[f"{body}_x"].dims)
 
     def ipr(self) -> xr.DataArray:
         """Shape index P / sqrt(A) of the membrane per sample (2 sqrt(pi) for a circle): of

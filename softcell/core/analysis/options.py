@@ -136,6 +136,32 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
 }
 
 
+def validated(
+    values: Mapping[str, Any] | None, specs: Mapping[str, ParameterSpec], what: str
+) -> dict[str, Any]:
+    """``specs``' defaults updated with ``values`` (None values are ignored), each checked.
+
+    Raises
+    ------
+    ConfigError
+        For a name not in ``specs`` (``what`` names the kind of option in the message).
+    ParameterError
+        For a value outside its range (names the option, value, range and unit).
+    """
+    given = {k: v for k, v in (values or {}).items() if v is not None}
+    for name in given:
+        if name not in specs:
+            raise ConfigError(f"unknown {what} {name!r}{suggest(name, specs)}")
+    out: dict[str, Any] = {}
+    for name, spec in specs.items():
+        if name in given:
+            out[name] = spec.coerce(given[name])
+            spec.check(out[name])
+        else:
+            out[name] = spec.default
+    return out
+
+
 def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Validated options: defaults updated with ``values`` (None values are ignored).
 
@@ -146,17 +172,7 @@ def analysis_options(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
     ParameterError
         For a value outside its range (names the option, value, range and unit).
     """
-    given = {k: v for k, v in (values or {}).items() if v is not None}
-    for name in given:
-        if name not in ANALYSIS_OPTIONS:
-            raise ConfigError(f"unknown analysis option {name!r}{suggest(name, ANALYSIS_OPTIONS)}")
-    out: dict[str, Any] = {}
-    for name, spec in ANALYSIS_OPTIONS.items():
-        if name in given:
-            out[name] = spec.coerce(given[name])
-            spec.check(out[name])
-        else:
-            out[name] = spec.default
+    out = validated(values, ANALYSIS_OPTIONS, "analysis option")
     if out["coupled_below"] > out["decoupled_above"]:
         from softcell.errors import ParameterError
 

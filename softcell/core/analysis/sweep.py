@@ -652,7 +652,10 @@ def analyze(
         The softcell schema (positions in cm, time in s); a sweep adds leading dims.
     options : mapping, optional
         Analysis options (``softcell.core.analysis.options.ANALYSIS_OPTIONS``; docs/analysis.md):
-        discard (s), fit windows (multiples of the mean go time), detector and threshold (cm/s), ...
+        discard (s), fit windows (multiples of the mean go time), detector and threshold
+        (cm/s), ...; for an assembly (a ``cell`` dim) also the collective ones
+        (``softcell.core.analysis.crowd.CROWD_OPTIONS``: crowd_every in s, contact_distance in
+        cm, ...), which a single cell's file refuses.
     progress : bool
         Show a progress bar over sweep points.
     registry : Registry, optional
@@ -662,9 +665,10 @@ def analyze(
     Returns
     -------
     xarray.Dataset
-        The analysis (``softcell.core.schema.ANALYSIS_VARIABLES``), with CF attributes on
-        every variable and the options, the input's parameters, seed and components in the
-        global attributes.
+        The analysis (``softcell.core.schema.ANALYSIS_VARIABLES``; an assembly's with a
+        ``cell`` dim on the per-cell variables and ``softcell.core.schema.CROWD_VARIABLES``),
+        with CF attributes on every variable and the options, the input's parameters, seed and
+        components in the global attributes.
 
     Raises
     ------
@@ -680,11 +684,12 @@ def analyze(
             f"analyze: ds is a {type(ds).__name__}, not an xarray.Dataset (open one with "
             "softcell.open_dataset)"
         )
+    from softcell.core.analysis import crowd
+
+    collective, options = crowd.split_crowd_options(options)
     if "cell" in ds.dims:
-        raise SoftcellError(
-            f"analyze: this is an assembly of {ds.sizes['cell']} cells (a cell dim); its "
-            "analysis is not built yet: analyze one cell, ds.isel(cell=0), in Python"
-        )
+        return crowd.analyze_assembly(ds, options, collective, progress=progress, registry=registry)
+    crowd.refuse_for_one_cell(collective)
     setup = _Setup(ds, options, registry if registry is not None else default_registry())
     res = _Results(setup, ds.sizes["realization"])
     radius = np.array([_radius(ds, p) for p in setup.points])
