@@ -55,7 +55,7 @@ class FigureSet:
     skipped: dict[str, str] = field(default_factory=dict)
 
     def update(self, other: FigureSet) -> None:
-        """Add ``other``'s files and skipped figures, in the order of :data:`FIGURES`."""
+        """Add ``other``'s files and skipped figures, in the order of ``FIGURES``."""
         files, skipped = {**self.files, **other.files}, {**self.skipped, **other.skipped}
         self.files = {k: files[k] for k in FIGURES if k in files}
         self.skipped = {k: skipped[k] for k in FIGURES if k in skipped}
@@ -710,7 +710,7 @@ def make_figures(
     formats : sequence of str
         File formats (matplotlib's names).
     only : sequence of str, optional
-        Draw only these figures (of :data:`FIGURES`); by default every one.
+        Draw only these figures (of ``softcell.io.figures.FIGURES``); by default every one.
 
     Returns
     -------
