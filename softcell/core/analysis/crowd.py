@@ -400,13 +400,10 @@ def _centres(edges: np.ndarray) -> np.ndarray:
 
 
 def _sem(values: np.ndarray) -> np.ndarray:
-    """Standard error across the leading axis (NaN below two rows)."""
-    n = np.sum(np.isfinite(values), axis=0)
-    spread = np.full(values.shape[1:], np.nan)
-    enough = n >= 2
-    if np.any(enough):
-        spread[enough] = np.nanstd(values[:, enough], axis=0, ddof=1) / np.sqrt(n[enough])
-    return spread
+    """Standard error of the mean across the leading axis (NaN below two finite rows)."""
+    from softcell.core.analysis.bootstrap import standard_error
+
+    return standard_error(values) / np.sqrt(np.maximum(np.isfinite(values).sum(axis=0), 1))
 
 
 def _binned_shape(crowd: _Crowd, ipr: np.ndarray) -> tuple[np.ndarray, ...]:
