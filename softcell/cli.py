@@ -15,6 +15,7 @@ import signal
 import sys
 import warnings
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -461,6 +462,14 @@ def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _cmd_study(args: argparse.Namespace) -> int:
     from softcell.workflows.sensitivity import VARIANTS, sensitivity, variants_named
 
+    if args.study == "constriction":
+        return _cmd_constriction(args)
+    given = [f for f in ("quick", "radii", "gaps", "realizations", "duration") if getattr(args, f)]
+    if given:
+        raise SoftcellError(
+            f"--{given[0]} belongs to 'study constriction'; 'study sensitivity' runs the quick "
+            "design"
+        )
     variants = (
         VARIANTS
         if args.only is None
@@ -479,13 +488,57 @@ def _cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_constriction(args: argparse.Namespace) -> int:
+    from softcell.workflows.constriction import FULL, QUICK, constriction
+
+    if args.only is not None:
+        raise SoftcellError("--only names sensitivity variants; 'study constriction' has none")
+    design = QUICK if args.quick else FULL
+    changes = {
+        "radii": _numbers("--radii", args.radii),
+        "gaps": _numbers("--gaps", args.gaps),
+        "realizations": args.realizations,
+        "duration": args.duration,
+    }
+    changes = {
+        k: tuple(v) if isinstance(v, list) else v for k, v in changes.items() if v is not None
+    }
+    if changes:
+        design = replace(design, name=f"{design.name}, changed", **changes)
+    report = constriction(
+        args.output,
+        design=design,
+        seed=args.seed,
+        workers=args.workers,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+        log=_note,
+    )
+    print(f"done: {report}")
+    return 0
+
+
 def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
         "study",
-        choices=["sensitivity"],
+        choices=["sensitivity", "constriction"],
         help="sensitivity: the quick design over one of the paper's unknowns at a "
-        "time (bot size, k, Lambda_c, lambda, rotation, friction)",
+        "time (bot size, k, Lambda_c, lambda, rotation, friction); constriction: how often "
+        "one cell passes a gap in a wall, against the gap's width and R",
     )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="constriction only: a look in a few minutes (2 radii, 3 gaps, 2 x 200 s) "
+        "instead of the full grid",
+    )
+    grid = p.add_argument_group("constriction grid (over the full or --quick design)")
+    grid.add_argument("--radii", metavar="R1,R2,...", help="cell radii R (cm)")
+    grid.add_argument(
+        "--gaps", metavar="G1,G2,...", help="gap widths w / 2R, in (0, 1.5]; 1.5 is no partition"
+    )
+    grid.add_argument("--realizations", type=int, help="realizations per (R, gap)")
+    grid.add_argument("--duration", type=float, help="duration of each realization (s)")
     p.add_argument(
         "--only",
         metavar="NAMES",
@@ -925,6 +978,41 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_export(p: argparse.ArgumentParser, strict: bool, specs) -> None:
+    p.add_argument(
+        "input", type=Path, help="simulation file, or a folder of one parameter point's files"
+    )
+    p.add_argument("-o", "--output", type=Path, required=True, help="trajectory: .gsd")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace an existing file softcell did not export"
+    )
+    p.add_argument(
+        "--realization", type=int, help="which realization (needed when the file holds several)"
+    )
+    p.add_argument(
+        "--every", type=int, default=1, help="write every N-th stored sample (default 1: all)"
+    )
+    p.set_defaults(func=_cmd_export)
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from softcell.io.export import check_gsd_path, to_gsd
+    from softcell.io.files import check_output, no_input
+    from softcell.io.netcdf import open_inputs
+
+    if not args.input.exists():
+        raise no_input(args.input, "simulation file")
+    check_gsd_path(args.output)
+    check_output(args.output, "export", inputs=[args.input], overwrite=args.overwrite)
+    with open_inputs([args.input]) as ds:
+        done = to_gsd(ds, args.output, realization=args.realization, every=args.every)
+    print(
+        f"{done.path}: {done.frames} frames of {done.particles} particles, "
+        f"t = {done.span[0]:g} .. {done.span[1]:.6g} s"
+    )
+    return 0
+
+
 def _add_track(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument("video", type=Path)
     p.add_argument("-o", "--output", type=Path, required=True, help="tracked file (.nc)")
@@ -1112,6 +1200,11 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
         "with trails, stop and go",
         _add_animate,
     ),
+    "export": (
+        "a simulation as a GSD trajectory (OVITO, freud, MDAnalysis): membrane nodes and "
+        "bots as particles, one frame per sample",
+        _add_export,
+    ),
     "track": ("track a top-view video into the simulation schema", _add_track),
     "figures": (
         "the paper's figures (PNG and PDF) from an analysis of a radius sweep",
@@ -1128,7 +1221,7 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
     ),
     "study": (
         "'study sensitivity': which of the paper's findings its unknowns decide, one "
-        "unknown at a time",
+        "unknown at a time; 'study constriction': does softness let a cell through a gap",
         _add_study,
     ),
     "calibrate": (

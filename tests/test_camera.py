@@ -75,6 +75,7 @@ def test_the_plate_calibrates_perspective_lens_and_parallax(simulated, tmp_path)
         assert np.hypot(*(np.array(camera.to_pixels(x, y, z)) - [u, v])).max() < 10 * worst
 
 
+@pytest.mark.slow  # 15-40 s of rendered frames
 def test_an_opencv_calibration_file_replaces_the_estimated_lens(simulated, tmp_path):
     scene = replace(Scene(), tilt=(1.0, 2.5), k1=-0.15)
     path = tmp_path / "calib.yml"
@@ -104,6 +105,7 @@ def test_looking_straight_down_parallax_needs_the_camera_height(simulated, tmp_p
     assert np.allclose(camera.position, Scene().center, atol=0.2)
 
 
+@pytest.mark.slow  # 15-40 s of rendered frames
 def test_every_effect_with_a_visible_wall(simulated, tmp_path):
     """Tilt, lens, vignetting, soft shadows (the lamp arm's and the bot's and wall's own),
     Bayer noise, motion blur, MPEG-4 4:2:0 and orange paper with a highlight, 3 mm wall,
@@ -240,6 +242,7 @@ def test_cli_track_from_the_plate_with_an_overlay(simulated, tmp_path, capsys):
     assert '"camera_position_cm"' in tracked.attrs["softcell_camera"]
 
 
+@pytest.mark.slow  # 15-40 s of rendered frames
 def test_paper_of_another_colour_is_named(simulated, tmp_path):
     footage = film(
         simulated,

@@ -146,6 +146,7 @@ def _verdict(rows, topic):
     return next(r.verdict for r in rows if r.topic == topic)
 
 
+@pytest.mark.slow  # ~50 s: the findings and their bootstraps, ten times over
 def test_verdicts_follow_their_stated_rules(results):
     out, _ = results
     analysis = softcell.read_dataset(out / "analysis.nc")

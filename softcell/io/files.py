@@ -31,7 +31,7 @@ from softcell.core.limits import human_bytes
 from softcell.errors import SoftcellError
 
 #: The kinds of output, and how an existing file of that kind is recognised.
-KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report")
+KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report", "export")
 
 #: Below this many free bytes a failed write is taken to be a full disk.
 FULL_DISK_BYTES = 1 << 20
@@ -224,6 +224,10 @@ def kind_of(path: str | os.PathLike[str]) -> str | None:
                 head = fh.read(4096)
             marks = (b"softcell reproduction report", b'"softcell_version"')
             return "report" if any(m in head for m in marks) else None
+        if suffix == ".gsd":
+            from softcell.io.export import gsd_attributes
+
+            return "export" if gsd_attributes(path) else None
     except (OSError, RuntimeError, ValueError):
         return None
     return None

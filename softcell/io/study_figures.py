@@ -211,3 +211,79 @@ def verdicts_figure(
     )
     _save(fig, folder / "verdicts.png", dpi=110)
     return "verdicts.png"
+
+
+def _values(points: Sequence[dict[str, Any]], key: str) -> np.ndarray:
+    """``key`` of every point as floats, None as NaN."""
+    return np.array([np.nan if p[key] is None else p[key] for p in points], dtype=float)
+
+
+def _rate_line(ax, gap, points, keys, style, bot_gap) -> None:
+    """One radius's line of a rate panel: the values with their errors, where no cell
+    passed the 95 % limit alone (an open triangle), and its bot width as a dotted line when
+    it falls within the grid."""
+    key, sem, upper = keys
+    value, limit = _values(points, key), _values(points, upper)
+    value[np.isfinite(limit)] = np.nan
+    ax.errorbar(gap, value, yerr=_values(points, sem), fmt="o-", capsize=3, **style)
+    ax.plot(gap, limit, "v", color=style["color"], mfc="none", ms=8)
+    if min(gap) <= bot_gap:
+        ax.axvline(bot_gap, color=style["color"], ls=":", lw=1)
+
+
+def constriction_figure(
+    path: Path,
+    points: Sequence[dict[str, Any]],
+    radii: Sequence[float],
+    open_gap: float,
+    bot_width: float,
+) -> str:
+    """``softcell study constriction``'s figure at ``path``: (a) passages per 100 s against
+    the gap w / 2R, one line per radius, with standard errors across realizations and, where
+    no cell passed, the Poisson 95 % upper limit as an open downward triangle (no point);
+    the open channel at w / 2R = ``open_gap``; each radius's bot width ``bot_width`` (cm)
+    over 2R as a dotted line where it falls within the grid. (b) The same over the open
+    channel's rate. (c) The membrane's shape index P / sqrt(A) with the centre in the gap.
+    Returns the caption's sentence on the bot widths outside the grid (empty if none)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(11.5, 4.0), constrained_layout=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    panels = (
+        (axes[0], "rate", "rate_sem", "rate_upper_95"),
+        (axes[1], "transmission", "transmission_sem", "transmission_upper_95"),
+    )
+    for i, radius in enumerate(radii):
+        mine = [p for p in points if p["radius"] == radius]
+        # side by side within a gap, so that equal limits of several radii all show
+        gap = _values(mine, "gap") + 0.012 * (i - (len(radii) - 1) / 2)
+        style = {"color": colours[i % len(colours)], "label": f"R = {radius:g} cm"}
+        for ax, key, sem, upper in panels:
+            _rate_line(ax, gap, mine, (key, sem, upper), style, bot_width / (2 * radius))
+        axes[2].plot(gap, _values(mine, "shape_index_in_gap"), "o-", **style)
+    axes[0].plot([], [], "kv", mfc="none", label="none passed: 95 % upper limit")
+    ticks = sorted({p["gap"] for p in points})
+    outside = [r for r in radii if bot_width / (2 * r) < ticks[0]]
+    if len(outside) < len(radii):
+        axes[0].plot([], [], "k:", lw=1, label="bot width 2b / 2R")
+    axes[0].plot([], [], color="0.7", lw=0.8, label="w = 2R")
+    axes[2].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
+    for ax in axes:
+        ax.set_xticks(ticks, [("open" if t >= open_gap else f"{t:g}") for t in ticks])
+        ax.set_xlabel("gap w / 2R (open: no partition)")
+        ax.axvline(1.0, color="0.7", lw=0.8)
+    axes[0].set(ylabel="passages per 100 s", title="(a) how often the cell passes")
+    axes[1].set(ylabel="rate / rate with no partition", title="(b) over the rate with no partition")
+    for ax in axes[:2]:
+        ax.set_ylim(bottom=0)
+    axes[2].set(ylabel="shape index P / sqrt(A)", title="(c) shape with the centre in the gap")
+    axes[0].legend(fontsize=8)
+    axes[2].legend(fontsize=8)
+    _save(fig, path, dpi=110)
+    if not outside:
+        return ""
+    widths = ", ".join(f"{bot_width / (2 * r):.2g} at R = {r:g} cm" for r in outside)
+    return f"The bot's width 2b = {bot_width:g} cm is w / 2R = {widths}: below every gap."

@@ -204,7 +204,7 @@ def _check_design(design: Design) -> None:
         )
 
 
-def _workers(workers: int | None, scheduler: str | None) -> int | None:
+def worker_count(workers: int | None, scheduler: str | None) -> int | None:
     """The local worker processes: as given, or every core when neither they nor a scheduler
     are given."""
     if workers is not None and workers < 1:
@@ -301,7 +301,7 @@ def reproduce(
     from softcell.workflows.report import write_report
 
     _check_design(design)
-    workers = _workers(workers, scheduler)
+    workers = worker_count(workers, scheduler)
     check_seed(seed)
     registry = registry if registry is not None else default_registry()
     out = check_output(out, "report", directory=True)

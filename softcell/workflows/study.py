@@ -81,6 +81,17 @@ def check_study_directory(out: Path, command: str, seed: int, overwrite: bool) -
         )
 
 
+def mark_study(out: Path, command: str, seed: int, overwrite: bool) -> None:
+    """Check that ``out`` may hold the study ``command`` from ``seed``
+    (:func:`check_study_directory`), create it, and mark it as that study's."""
+    from softcell.io.files import atomic_write
+
+    check_study_directory(out, command, seed, overwrite)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / STUDY_MANIFEST) as tmp:
+        tmp.write_text(json.dumps({"study": command, "seed": seed}) + "\n", encoding="utf-8")
+
+
 def run_variants(
     out: Path,
     variants: tuple[Variant, ...],
@@ -99,14 +110,11 @@ def run_variants(
     ``out`` must be new, empty or a folder the study ``command`` made from ``seed``
     (:func:`check_study_directory`); it is marked as such before any variant runs.
     """
-    from softcell.io.files import atomic_write, check_output
+    from softcell.io.files import check_output
     from softcell.workflows.reproduce import finished
 
     out = check_output(Path(out), "report", directory=True)
-    check_study_directory(out, command, seed, overwrite)
-    out.mkdir(parents=True, exist_ok=True)
-    with atomic_write(out / STUDY_MANIFEST) as tmp:
-        tmp.write_text(json.dumps({"study": command, "seed": seed}) + "\n", encoding="utf-8")
+    mark_study(out, command, seed, overwrite)
     say = log or (lambda _: None)
     for i, variant in enumerate(variants):
         design, folder = variant.design(base), out / variant.name
