@@ -462,13 +462,14 @@ def _add_beyond(p: argparse.ArgumentParser, strict: bool, specs) -> None:
 def _cmd_study(args: argparse.Namespace) -> int:
     from softcell.workflows.sensitivity import VARIANTS, sensitivity, variants_named
 
-    if args.study == "constriction":
-        return _cmd_constriction(args)
-    given = [f for f in ("quick", "radii", "gaps", "realizations", "duration") if getattr(args, f)]
+    if args.study in GRID_STUDIES:
+        return _cmd_grid_study(args)
+    flags = (*GRID_FLAGS, *(f for _, own in GRID_STUDIES.values() for f in own))
+    given = [f for f in flags if getattr(args, f)]
     if given:
         raise SoftcellError(
-            f"--{given[0]} belongs to 'study constriction'; 'study sensitivity' runs the quick "
-            "design"
+            f"--{given[0]} belongs to 'study constriction' or 'study crowding'; 'study "
+            "sensitivity' runs the quick design"
         )
     variants = (
         VARIANTS
@@ -488,24 +489,47 @@ def _cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_constriction(args: argparse.Namespace) -> int:
-    from softcell.workflows.constriction import FULL, QUICK, constriction
+#: The grid studies: each one's module, and the flags that belong to it alone.
+GRID_STUDIES = {
+    "constriction": ("softcell.workflows.constriction", ("gaps",)),
+    "crowding": ("softcell.workflows.crowding", ("fractions", "cells")),
+}
+#: Flags every grid study takes over its design.
+GRID_FLAGS = ("quick", "radii", "realizations", "duration")
 
+
+def _cmd_grid_study(args: argparse.Namespace) -> int:
+    """``softcell study constriction`` or ``crowding``: the full or quick grid, changed by
+    the grid flags given."""
+    import importlib
+
+    name, own = GRID_STUDIES[args.study][0], GRID_STUDIES[args.study][1]
     if args.only is not None:
-        raise SoftcellError("--only names sensitivity variants; 'study constriction' has none")
-    design = QUICK if args.quick else FULL
+        raise SoftcellError(f"--only names sensitivity variants; 'study {args.study}' has none")
+    foreign = [
+        f for s, (_, flags) in GRID_STUDIES.items() if s != args.study for f in flags
+        if getattr(args, f) is not None
+    ]  # fmt: skip
+    if foreign:
+        raise SoftcellError(f"--{foreign[0]} does not belong to 'study {args.study}'")
+    module = importlib.import_module(name)
+    design = module.QUICK if args.quick else module.FULL
     changes = {
         "radii": _numbers("--radii", args.radii),
         "gaps": _numbers("--gaps", args.gaps),
+        "fractions": _numbers("--fractions", args.fractions),
+        "cells": args.cells,
         "realizations": args.realizations,
         "duration": args.duration,
     }
     changes = {
-        k: tuple(v) if isinstance(v, list) else v for k, v in changes.items() if v is not None
+        k: tuple(v) if isinstance(v, list) else v
+        for k, v in changes.items()
+        if v is not None and (k in own or k not in ("gaps", "fractions", "cells"))
     }
     if changes:
         design = replace(design, name=f"{design.name}, changed", **changes)
-    report = constriction(
+    report = getattr(module, args.study)(
         args.output,
         design=design,
         seed=args.seed,
@@ -521,23 +545,30 @@ def _cmd_constriction(args: argparse.Namespace) -> int:
 def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
         "study",
-        choices=["sensitivity", "constriction"],
+        choices=["sensitivity", "constriction", "crowding"],
         help="sensitivity: the quick design over one of the paper's unknowns at a "
         "time (bot size, k, Lambda_c, lambda, rotation, friction); constriction: how often "
-        "one cell passes a gap in a wall, against the gap's width and R",
+        "one cell passes a gap in a wall, against the gap's width and R; crowding: the cells' "
+        "D hat and <tau_g> against area fraction and R",
     )
     p.add_argument(
         "--quick",
         action="store_true",
-        help="constriction only: a look in a few minutes (2 radii, 3 gaps, 2 x 200 s) "
-        "instead of the full grid",
+        help="constriction and crowding: a look (constriction ~1 min, crowding ~25 min on 2 "
+        "cores) instead of the full grid (20 min, ~5 h)",
     )
-    grid = p.add_argument_group("constriction grid (over the full or --quick design)")
+    grid = p.add_argument_group("constriction and crowding grids (over the full or --quick design)")
     grid.add_argument("--radii", metavar="R1,R2,...", help="cell radii R (cm)")
     grid.add_argument(
-        "--gaps", metavar="G1,G2,...", help="gap widths w / 2R, in (0, 1.5]; 1.5 is no partition"
+        "--gaps",
+        metavar="G1,G2,...",
+        help="constriction: gap widths w / 2R, in (0, 1.5]; 1.5 is no partition",
     )
-    grid.add_argument("--realizations", type=int, help="realizations per (R, gap)")
+    grid.add_argument(
+        "--fractions", metavar="F1,F2,...", help="crowding: area fractions, in (0, 0.785)"
+    )
+    grid.add_argument("--cells", type=int, help="crowding: cells per box (a square number)")
+    grid.add_argument("--realizations", type=int, help="realizations per grid point")
     grid.add_argument("--duration", type=float, help="duration of each realization (s)")
     p.add_argument(
         "--only",
@@ -980,34 +1011,63 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 def _add_export(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
-        "input", type=Path, help="simulation file, or a folder of one parameter point's files"
+        "input", type=Path, help="simulation or tracking file, or a folder of one point's files"
     )
-    p.add_argument("-o", "--output", type=Path, required=True, help="trajectory: .gsd")
+    p.add_argument(
+        "-o", "--output", type=Path, required=True, help="trajectory: .gsd, or .nc for movement"
+    )
+    p.add_argument(
+        "--to",
+        choices=["gsd", "movement"],
+        help="gsd (OVITO, freud, MDAnalysis; a simulation) or movement's poses dataset "
+        "(netCDF; a tracked video or a simulation); default: from the output's suffix",
+    )
     p.add_argument(
         "--overwrite", action="store_true", help="replace an existing file softcell did not export"
     )
     p.add_argument(
-        "--realization", type=int, help="which realization (needed when the file holds several)"
+        "--realization", type=int, help="which realization (needed when the input holds several)"
     )
     p.add_argument(
-        "--every", type=int, default=1, help="write every N-th stored sample (default 1: all)"
+        "--every", type=int, default=1, help="gsd: write every N-th stored sample (default 1)"
     )
     p.set_defaults(func=_cmd_export)
 
 
+def _export_format(args: argparse.Namespace) -> str:
+    """``--to``, or the format the output's suffix names; refused in one line when neither
+    says."""
+    suffix = args.output.suffix.lower()
+    implied = {".gsd": "gsd", ".nc": "movement"}.get(suffix)
+    if args.to is None and implied is None:
+        raise SoftcellError(
+            f"-o {args.output}: give a .gsd (GSD) or .nc (movement) file, or --to gsd|movement"
+        )
+    to = args.to or implied
+    if to == "movement" and args.every != 1:
+        raise SoftcellError("--every belongs to --to gsd; movement keeps every sample")
+    return to
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
-    from softcell.io.export import check_gsd_path, to_gsd
+    from softcell.io.export import check_gsd_path, to_gsd, to_movement
     from softcell.io.files import check_output, no_input
     from softcell.io.netcdf import open_inputs
 
     if not args.input.exists():
-        raise no_input(args.input, "simulation file")
-    check_gsd_path(args.output)
+        raise no_input(args.input, "simulation or tracking file")
+    to = _export_format(args)
+    if to == "gsd":
+        check_gsd_path(args.output)
     check_output(args.output, "export", inputs=[args.input], overwrite=args.overwrite)
     with open_inputs([args.input]) as ds:
-        done = to_gsd(ds, args.output, realization=args.realization, every=args.every)
+        if to == "gsd":
+            done = to_gsd(ds, args.output, realization=args.realization, every=args.every)
+        else:
+            done = to_movement(ds, args.output, realization=args.realization)
+    what = "particles" if to == "gsd" else "keypoints x individuals"
     print(
-        f"{done.path}: {done.frames} frames of {done.particles} particles, "
+        f"{done.path}: {done.frames} frames of {done.particles} {what}, "
         f"t = {done.span[0]:g} .. {done.span[1]:.6g} s"
     )
     return 0
@@ -1201,8 +1261,8 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
         _add_animate,
     ),
     "export": (
-        "a simulation as a GSD trajectory (OVITO, freud, MDAnalysis): membrane nodes and "
-        "bots as particles, one frame per sample",
+        "a simulation as a GSD trajectory (OVITO, freud, MDAnalysis), or a tracked video or "
+        "simulation as movement's poses dataset (napari)",
         _add_export,
     ),
     "track": ("track a top-view video into the simulation schema", _add_track),
@@ -1221,7 +1281,8 @@ COMMANDS: dict[str, tuple[str, Callable[..., None]]] = {
     ),
     "study": (
         "'study sensitivity': which of the paper's findings its unknowns decide, one "
-        "unknown at a time; 'study constriction': does softness let a cell through a gap",
+        "unknown at a time; 'study constriction': does softness let a cell through a gap; "
+        "'study crowding': D hat and <tau_g> against area fraction",
         _add_study,
     ),
     "calibrate": (

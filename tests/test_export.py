@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import warnings
+from pathlib import Path
 
 import gsd.hoomd
 import MDAnalysis as mda
@@ -12,6 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import trackpy
+import xarray as xr
 from MDAnalysis.analysis.msd import EinsteinMSD
 
 import softcell
@@ -19,7 +21,7 @@ from softcell.cli import main
 from softcell.core.analysis.msd import msd
 from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
-from softcell.io.export import gsd_attributes, to_gsd
+from softcell.io.export import gsd_attributes, to_gsd, to_movement
 from softcell.io.netcdf import open_inputs
 
 
@@ -149,7 +151,7 @@ def test_bad_requests_are_one_line(one_cell, tmp_path, capsys, argv, words):
 
 
 def test_the_output_must_be_gsd_and_others_files_are_kept(one_cell, tmp_path, capsys):
-    assert main(["export", str(one_cell), "-o", str(tmp_path / "t.xyz")]) == 2
+    assert main(["export", str(one_cell), "-o", str(tmp_path / "t.xyz"), "--to", "gsd"]) == 2
     assert "a GSD file ends in .gsd" in capsys.readouterr().err
     mine = tmp_path / "notes.gsd"
     mine.write_text("mine")
@@ -170,3 +172,67 @@ def test_only_a_simulation_is_exported(one_cell, tmp_path, capsys):
     with pytest.raises(SoftcellError, match="this one is a softcell tracking file"):
         to_gsd(tracked, tmp_path / "t.gsd", realization=0)
     assert not (tmp_path / "t.gsd").exists()
+
+
+# -- movement -----------------------------------------------------------------------------------
+
+REFERENCE = Path(__file__).with_name("data") / "movement_poses_reference.nc"
+
+
+def _tracked_from(reference: xr.Dataset) -> xr.Dataset:
+    """A tracking file (softcell's tracked schema) holding the reference's planted tracks."""
+    from softcell.core.tracking import FLAGS, TrackResult, tracked_dataset
+
+    p = reference["position"].values[:, :, :, 0]  # time, space, keypoint
+    bot, front, cell = p[:, :, 0], p[:, :, 1], p[:, :, 2]
+    heading = np.arctan2(front[:, 1] - bot[:, 1], front[:, 0] - bot[:, 0])
+    result = TrackResult()
+    for i, t in enumerate(reference["time"].values):
+        lost = not np.isfinite(bot[i]).all()
+        result.times.append(float(t))
+        result.cell.append(tuple(cell[i]))
+        result.bot.append((*bot[i], heading[i]))
+        result.membrane.append(np.full((8, 2), np.nan) if lost else cell[i] + np.ones((8, 2)))
+        result.flags.append(FLAGS["both_lost"] if lost else FLAGS["ok"])
+        result.marked.append(True)
+    return tracked_dataset(result, nodes=8, radius=5.0, attrs={})
+
+
+def test_a_tracked_video_becomes_movements_own_poses_dataset(tmp_path):
+    """The poses file of a tracked file is the one movement's load_poses.from_numpy makes of
+    the same tracks (the stored reference: tests/data/make_movement_reference.py)."""
+    reference = xr.open_dataset(REFERENCE)
+    tracked = _tracked_from(reference)
+    done = to_movement(tracked, tmp_path / "poses.nc")
+    assert done.frames == 31 and done.particles == 3
+    ours = xr.open_dataset(tmp_path / "poses.nc")
+    for name in ("position", "confidence"):
+        assert ours[name].dims == reference[name].dims
+        np.testing.assert_allclose(ours[name].values, reference[name].values, atol=1e-9)
+    for coord in ("time", "space", "keypoints", "individuals"):
+        np.testing.assert_array_equal(ours[coord].values, reference[coord].values)
+    for key in ("ds_type", "fps", "time_unit"):
+        assert ours.attrs[key] == reference.attrs[key]
+    assert json.loads(ours.attrs["softcell_attributes"])["softcell_origin"] == "tracking"
+
+
+def test_movement_bad_requests_are_one_line(one_cell, tmp_path, capsys):
+    # the default sampling switches from 0.01 s to 0.1 s: no single fps
+    uneven = tmp_path / "uneven"
+    softcell.simulate(
+        RunConfig(parameters={"radius": 5.0, "duration": 1.0, "sample_switch": 0.5}),
+        uneven,
+        progress=False,
+    )
+    assert main(["export", str(uneven), "-o", str(tmp_path / "p.nc")]) == 2
+    assert "evenly spaced in time" in capsys.readouterr().err
+    assert main(["export", str(one_cell), "-o", str(tmp_path / "p.txt")]) == 2
+    assert "give a .gsd (GSD) or .nc (movement) file" in capsys.readouterr().err
+    argv = ["export", str(one_cell), "-o", str(tmp_path / "p.nc"), "--every", "2"]
+    assert main([*argv, "--realization", "0"]) == 2
+    assert "--every belongs to --to gsd" in capsys.readouterr().err
+    assert main(["export", str(one_cell), "-o", str(tmp_path / "p.nc"), "--realization", "1"]) == 0
+    poses = xr.open_dataset(tmp_path / "p.nc")
+    assert poses.attrs["fps"] == pytest.approx(20.0) and poses.sizes["time"] == 161
+    # a rerun replaces its own export; the folder still reads as the simulation it was
+    assert main(["export", str(one_cell), "-o", str(tmp_path / "p.nc"), "--realization", "0"]) == 0

@@ -243,3 +243,114 @@ def gsd_attributes(path: str | os.PathLike[str]) -> dict | None:
             return None
         raw = trajectory[0].log.get("softcell/attributes")
     return None if raw is None else json.loads(np.asarray(raw, dtype=np.uint8).tobytes())
+
+
+# -- movement's poses dataset -----------------------------------------------------------------
+
+#: The keypoints of a poses dataset: the bot's centre, the point its heading marks at its
+#: semi-major axis (so that a pose carries the heading), and the cell's centre (membrane GC).
+KEYPOINTS = ("bot", "bot_front", "cell")
+
+
+def to_movement(
+    ds: xr.Dataset, path: str | os.PathLike[str], *, realization: int | None = None
+) -> Exported:
+    """Write one realization of a tracked or simulated ``ds`` as a poses dataset of the
+    ``movement`` package (netCDF), which ``movement`` and its napari widget load.
+
+    The layout is movement's: ``position`` (time, space, keypoints, individuals) in cm and
+    ``confidence`` (time, keypoints, individuals), with the attributes ``ds_type = "poses"``,
+    ``source_software``, ``fps`` and ``time_unit = "seconds"``. The keypoints are
+    bot, bot_front and cell (``KEYPOINTS``); the individuals are the cells (one, or an
+    assembly's). Time keeps its values (s). A tracked frame whose bot or membrane was lost has NaN positions and
+    confidence 0 for those keypoints; everything else has confidence 1.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A tracking file (``softcell track``) or a simulation file of one parameter point.
+    path : path-like
+        The ``.nc`` file, written atomically.
+    realization : int, optional
+        Which realization; required when ``ds`` holds more than one.
+
+    Returns
+    -------
+    Exported
+        ``particles`` is keypoints x individuals.
+
+    Raises
+    ------
+    SoftcellError
+        For an input that is neither, a realization it does not hold, samples that are not
+        evenly spaced in time (movement's ``fps``), or an output not ending in ``.nc``.
+    """
+    from softcell.io.files import atomic_write
+
+    path = Path(path)
+    if path.suffix.lower() != ".nc":
+        raise SoftcellError(f"-o {path}: a movement poses file is netCDF and ends in .nc")
+    origin = ds.attrs.get("softcell_origin")
+    if origin not in ("tracking", "simulation"):
+        raise SoftcellError(
+            f"--to movement takes a tracking or simulation file; this one is a softcell "
+            f"{origin or 'unknown'} file"
+        )
+    one = _realization(ds, realization)
+    time = one["time"].values
+    step = np.diff(time)
+    if time.size < 2 or not np.allclose(step, step[0], rtol=1e-6):
+        raise SoftcellError(
+            "--to movement needs samples evenly spaced in time (movement has one fps); this "
+            "file's sampling changes (export from a run with sample_every_late = sample_every)"
+        )
+    position, confidence, names = _poses(one, ds)
+    poses = xr.Dataset(
+        {
+            "position": (("time", "space", "keypoints", "individuals"), position, {"units": "cm"}),
+            "confidence": (("time", "keypoints", "individuals"), confidence, {"units": "1"}),
+        },
+        coords={
+            "time": ("time", time, {"units": "s"}),
+            "space": ["x", "y"],
+            "keypoints": list(KEYPOINTS),
+            "individuals": names,
+        },
+        attrs={
+            "ds_type": "poses",
+            "source_software": f"softcell {ds.attrs.get('softcell_version', '')} {origin}",
+            "fps": float(1.0 / step[0]),
+            "time_unit": "seconds",
+            "softcell_origin": "export",
+            "softcell_attributes": json.dumps({k: _plain(v) for k, v in ds.attrs.items()}),
+        },
+    )
+    with atomic_write(path) as tmp:
+        poses.to_netcdf(tmp)
+    span = (float(time[0]), float(time[-1]))
+    return Exported(path, int(time.size), len(KEYPOINTS) * len(names), span)
+
+
+def _poses(one: xr.Dataset, ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(time, 2, keypoints, cells) positions in cm, (time, keypoints, cells) confidences and
+    the individuals' names."""
+    from softcell.core.params import MODEL_PARAMETERS
+
+    params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
+    semi_major = float(params.get("bot_semi_major", MODEL_PARAMETERS["bot_semi_major"].default))
+
+    def cells(name: str) -> np.ndarray:  # (time, cells)
+        return one[name].values.reshape(one.sizes["time"], -1)
+
+    angle = cells("bot_angle")
+    bx, by = cells("bot_x"), cells("bot_y")
+    points = [
+        (bx, by),
+        (bx + semi_major * np.cos(angle), by + semi_major * np.sin(angle)),
+        (cells("cell_x"), cells("cell_y")),
+    ]
+    position = np.stack([np.stack(p, axis=1) for p in points], axis=2)
+    confidence = np.isfinite(position).all(axis=1).astype(np.float64)
+    count = position.shape[-1]
+    names = ["cell"] if count == 1 else [f"cell_{c}" for c in range(count)]
+    return position, confidence, names

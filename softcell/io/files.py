@@ -211,7 +211,7 @@ def kind_of(path: str | os.PathLike[str]) -> str | None:
 
             with netCDF4.Dataset(path) as nc:
                 origin = getattr(nc, "softcell_origin", None)
-            return origin if origin in ("simulation", "tracking", "analysis") else None
+            return origin if origin in ("simulation", "tracking", "analysis", "export") else None
         if suffix in (".png", ".pdf", ".svg"):
             size = path.stat().st_size
             with open(path, "rb") as fh:

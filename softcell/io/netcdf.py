@@ -290,12 +290,12 @@ def _sweep_files(directory: Path) -> list[Path]:
 
 
 def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.Dataset:
-    """One Dataset from the files of a sweep; analysis files among them are left out (they
-    are results, not records)."""
+    """One Dataset from the files of a sweep; analysis and export files among them are left
+    out (they are results, not records)."""
     parts, names = [], []
     for f in files:
         ds = _open(f, chunks)
-        if ds.attrs.get("softcell_origin") == "analysis":
+        if ds.attrs.get("softcell_origin") in ("analysis", "export"):
             ds.close()
             continue
         parts.append(ds)

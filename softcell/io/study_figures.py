@@ -287,3 +287,42 @@ def constriction_figure(
         return ""
     widths = ", ".join(f"{bot_width / (2 * r):.2g} at R = {r:g} cm" for r in outside)
     return f"The bot's width 2b = {bot_width:g} cm is w / 2R = {widths}: below every gap."
+
+
+def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequence[float]) -> None:
+    """``softcell study crowding``'s figure at ``path``: D hat (cm^2/s), <tau_g> (s) and
+    the shape index against the area fraction, one line per radius with standard errors
+    across realizations; the lone cell (no area fraction) at 0, as an open marker."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(11.5, 3.8), constrained_layout=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    panels = (
+        ("msd_slope", "D hat (cm$^2$/s)", "(a) long-time D hat of the cells"),
+        ("mean_go_duration", "<tau_g> (s)", "(b) mean go duration"),
+        ("ipr_mean", "shape index P / sqrt(A)", "(c) mean shape index"),
+    )
+    for i, radius in enumerate(radii):
+        c = colours[i % len(colours)]
+        alone = next(p for p in points if p["radius"] == radius and p["fraction"] is None)
+        crowd = [p for p in points if p["radius"] == radius and p["fraction"] is not None]
+        phi = [p["fraction"] for p in crowd]
+        for ax, (key, label, title) in zip(axes, panels, strict=True):
+            ax.errorbar(
+                phi, _values(crowd, key), yerr=_values(crowd, f"{key}_sem"), fmt="o-",
+                color=c, capsize=3, label=f"R = {radius:g} cm",
+            )  # fmt: skip
+            ax.errorbar(
+                [0.0], [alone[key]], yerr=[alone[f"{key}_sem"]], fmt="o", mfc="none", color=c,
+                capsize=3,
+            )  # fmt: skip
+            ax.set(xlabel="area fraction phi (open marker: a lone cell)", ylabel=label, title=title)
+    axes[0].set_ylim(bottom=0)
+    axes[1].set_ylim(bottom=0)
+    axes[2].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
+    axes[0].legend(fontsize=8)
+    axes[2].legend(fontsize=8)
+    _save(fig, path, dpi=110)
