@@ -262,8 +262,9 @@ def to_movement(
     ``confidence`` (time, keypoints, individuals), with the attributes ``ds_type = "poses"``,
     ``source_software``, ``fps`` and ``time_unit = "seconds"``. The keypoints are
     bot, bot_front and cell (``KEYPOINTS``); the individuals are the cells (one, or an
-    assembly's). Time keeps its values (s). A tracked frame whose bot or membrane was lost has NaN positions and
-    confidence 0 for those keypoints; everything else has confidence 1.
+    assembly's). Time keeps its values (s). A tracked frame whose bot or membrane was lost
+    has NaN positions and confidence 0 for those keypoints; everything else has
+    confidence 1.
 
     Parameters
     ----------
