@@ -1317,6 +1317,12 @@ workflows:
     softcell track cell.mkv --px-per-cm 10 --origin=X0,Y0 -o tracked.nc  (render
       prints the --origin to give)
     softcell analyze tracked.nc -o tracked_analysis.nc
+  in other tools: OVITO, freud, MDAnalysis (GSD); movement and napari (poses)
+    softcell export run/point000_realization0000.nc -o cell.gsd
+    softcell export tracked.nc -o poses.nc
+  studies beyond the paper: a cell at a gap; crowds
+    softcell study constriction --quick -o gap
+    softcell study crowding --quick -o crowding
 
 'softcell COMMAND --help' lists a command's options. The documentation
 (docs/getting-started.md in the source, first) explains the model, the analysis

@@ -183,7 +183,7 @@ def test_every_example_of_the_top_level_help_is_a_valid_command_line():
         for line in WORKFLOWS.splitlines()
         if line.strip().startswith("softcell ")
     ]
-    assert len(examples) == 10
+    assert len(examples) == 14
     for example in examples:
         args = parse_arguments(shlex.split(example.replace("X0,Y0", "1.5,-2"))[1:])
         assert args.command == shlex.split(example)[1], example
