@@ -93,3 +93,14 @@ def test_a_small_study_end_to_end(tmp_path):
         assert point["msd_slope_sem"] == pytest.approx(np.std(each, ddof=1) / math.sqrt(2))
     assert (out / "crowding.png").stat().st_size > 10_000
     assert "| 5 | alone | - |" in (out / "crowding.md").read_text()
+
+
+def test_a_summary_of_points_not_run_says_so(tmp_path):
+    from softcell.workflows.crowding import summarize
+
+    summarize(tmp_path, SMALL, seed=0)
+    result = json.loads((tmp_path / "crowding.json").read_text())
+    assert [p.get("missing") for p in result["points"]] == [True, True]
+    assert (
+        "| 5 | 0.5 | 25.1 | not run | not run | not run |" in (tmp_path / "crowding.md").read_text()
+    )

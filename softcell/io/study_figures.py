@@ -307,18 +307,20 @@ def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequenc
     )
     for i, radius in enumerate(radii):
         c = colours[i % len(colours)]
-        alone = next(p for p in points if p["radius"] == radius and p["fraction"] is None)
-        crowd = [p for p in points if p["radius"] == radius and p["fraction"] is not None]
+        mine = [p for p in points if p["radius"] == radius and not p.get("missing")]
+        alone = next((p for p in mine if p["fraction"] is None), None)
+        crowd = [p for p in mine if p["fraction"] is not None]
         phi = [p["fraction"] for p in crowd]
         for ax, (key, label, title) in zip(axes, panels, strict=True):
             ax.errorbar(
                 phi, _values(crowd, key), yerr=_values(crowd, f"{key}_sem"), fmt="o-",
                 color=c, capsize=3, label=f"R = {radius:g} cm",
             )  # fmt: skip
-            ax.errorbar(
-                [0.0], [alone[key]], yerr=[alone[f"{key}_sem"]], fmt="o", mfc="none", color=c,
-                capsize=3,
-            )  # fmt: skip
+            if alone is not None:
+                ax.errorbar(
+                    [0.0], [alone[key]], yerr=[alone[f"{key}_sem"]], fmt="o", mfc="none",
+                    color=c, capsize=3,
+                )  # fmt: skip
             ax.set(xlabel="area fraction phi (open marker: a lone cell)", ylabel=label, title=title)
     axes[0].set_ylim(bottom=0)
     axes[1].set_ylim(bottom=0)

@@ -263,13 +263,18 @@ def measure_point(folder: Path, realizations: int) -> dict[str, Any]:
 
 def measure(out: Path, design: CrowdingDesign) -> list[dict[str, Any]]:
     """Every point of ``design`` in ``out``: the lone cell first, then each area fraction,
-    radius by radius."""
+    radius by radius; a point whose realizations are not all there is marked ``missing``."""
     points = []
     for radius in design.radii:
         for phi in (None, *design.fractions):
-            point = measure_point(_folder(out, radius, phi), design.realizations)
+            folder = _folder(out, radius, phi)
+            files = [folder / f"point000_realization{r:04d}.nc" for r in range(design.realizations)]
             box = None if phi is None else box_side(design.cells, radius, phi)
-            points.append({"radius": radius, "fraction": phi, "box_cm": box, **point})
+            point = {"radius": radius, "fraction": phi, "box_cm": box}
+            if all(f.is_file() for f in files):
+                points.append({**point, **measure_point(folder, design.realizations)})
+            else:  # a study stopped before this point finished (summarize called alone)
+                points.append({**point, "missing": True})
     return points
 
 
@@ -324,6 +329,9 @@ def _markdown(result: dict[str, Any]) -> str:
     for p in result["points"]:
         phi = "alone" if p["fraction"] is None else f"{p['fraction']:g}"
         box = "-" if p["box_cm"] is None else f"{p['box_cm']:.1f}"
+        if p.get("missing"):
+            lines.append(f"| {p['radius']:g} | {phi} | {box} | not run | not run | not run |")
+            continue
         lines.append(
             f"| {p['radius']:g} | {phi} | {box} | {_pm(p, 'msd_slope', '.3g')} | "
             f"{_pm(p, 'mean_go_duration', '.3g')} | {_pm(p, 'ipr_mean', '.4f')} |"
