@@ -554,8 +554,8 @@ def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
         "--quick",
         action="store_true",
-        help="constriction and crowding: a look (constriction ~1 min, crowding ~25 min on 2 "
-        "cores) instead of the full grid (20 min, ~5 h)",
+        help="constriction and crowding: a look (constriction ~1 min, crowding ~1 h on 2 "
+        "cores) instead of the full grid (20 min; ~12 h)",
     )
     grid = p.add_argument_group("constriction and crowding grids (over the full or --quick design)")
     grid.add_argument("--radii", metavar="R1,R2,...", help="cell radii R (cm)")

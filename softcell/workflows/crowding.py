@@ -96,7 +96,8 @@ class CrowdingDesign:
             )
 
 
-#: The study as docs/assemblies.md will show it: ~5 h on 2 cores (not yet run).
+#: The full grid: ~12 h on 2 cores, estimated from the quick grid's cost per cell-second
+#: (not yet run).
 FULL = CrowdingDesign(
     name="full",
     radii=(5.0, 10.0),
@@ -105,7 +106,7 @@ FULL = CrowdingDesign(
     realizations=4,
     duration=300.0,
 )
-#: A look: 9 cells, three area fractions, 3 realizations of 120 s.
+#: A look: 9 cells, three area fractions, 3 realizations of 120 s (54 min on 2 cores).
 QUICK = CrowdingDesign(
     name="quick",
     radii=(5.0, 10.0),
@@ -166,7 +167,7 @@ def crowding(
         ``R<R>_alone/`` the lone cell's (resumable as ``softcell simulate``'s are);
         ``crowding.json``, ``crowding.md`` and ``crowding.png`` the result.
     design : CrowdingDesign
-        The grid (default ``FULL``, about 5 h on 2 cores; ``QUICK`` for a look).
+        The grid (default ``FULL``, about 12 h on 2 cores; ``QUICK`` for a look).
     seed : int
         Root seed (every point draws the same streams).
     workers : int, optional
