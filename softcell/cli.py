@@ -501,9 +501,9 @@ GRID_FLAGS = ("quick", "radii", "realizations", "duration")
 def _cmd_grid_study(args: argparse.Namespace) -> int:
     """``softcell study constriction`` or ``crowding``: the full or quick grid, changed by
     the grid flags given."""
-    import importlib
+    from softcell.workflows import constriction, crowding
 
-    name, own = GRID_STUDIES[args.study][0], GRID_STUDIES[args.study][1]
+    own = GRID_STUDIES[args.study][1]
     if args.only is not None:
         raise SoftcellError(f"--only names sensitivity variants; 'study {args.study}' has none")
     foreign = [
@@ -512,7 +512,7 @@ def _cmd_grid_study(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     if foreign:
         raise SoftcellError(f"--{foreign[0]} does not belong to 'study {args.study}'")
-    module = importlib.import_module(name)
+    module = {"constriction": constriction, "crowding": crowding}[args.study]
     design = module.QUICK if args.quick else module.FULL
     changes = {
         "radii": _numbers("--radii", args.radii),

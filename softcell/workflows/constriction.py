@@ -366,7 +366,7 @@ def summarize(
     """``constriction.json``, ``constriction.png`` and ``constriction.md`` in ``out`` from
     its runs (made with the model ``parameters`` over the defaults); returns the markdown's
     path."""
-    from softcell import __version__
+    from softcell._version import __version__
     from softcell.core.params import MODEL_PARAMETERS
     from softcell.io.files import atomic_write
     from softcell.io.study_figures import constriction_figure

@@ -244,12 +244,13 @@ def measure_point(folder: Path, realizations: int) -> dict[str, Any]:
     """One point from its realizations: each analysed alone (pooled over its cells, the
     first :data:`DISCARD` s dropped), then the mean and standard error across realizations
     of the cells' D hat (cm^2/s), <tau_g> (s) and shape index P / sqrt(A)."""
-    import softcell
+    from softcell.core.analysis import analyze
+    from softcell.io.netcdf import open_dataset
 
     values: dict[str, list[float]] = {"msd_slope": [], "mean_go_duration": [], "ipr_mean": []}
     for r in range(realizations):
-        ds = softcell.open_dataset(folder / f"point000_realization{r:04d}.nc")
-        analysis = softcell.analyze(ds, {"discard": DISCARD})
+        ds = open_dataset(folder / f"point000_realization{r:04d}.nc")
+        analysis = analyze(ds, {"discard": DISCARD})
         for key in values:
             value = analysis[key]
             values[key].append(float(value.sel(body="cell") if "body" in value.dims else value))
@@ -284,7 +285,7 @@ def summarize(
 ) -> Path:
     """``crowding.json``, ``crowding.png`` and ``crowding.md`` in ``out`` from its runs
     (made with the model ``parameters`` over the defaults); returns the markdown's path."""
-    from softcell import __version__
+    from softcell._version import __version__
     from softcell.io.files import atomic_write
     from softcell.io.study_figures import crowding_figure
 
