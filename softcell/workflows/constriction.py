@@ -29,7 +29,6 @@ import json
 import math
 import os
 from collections.abc import Callable, Sequence
-from contextlib import nullcontext
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -227,45 +226,30 @@ def constriction(
         (checked for every radius before anything runs), or a directory another study or
         seed made.
     """
-    from softcell.core.components.registry import default_registry
     from softcell.io.files import check_output
-    from softcell.workflows.cluster import cluster_client
-    from softcell.workflows.ensemble import plan, simulate
-    from softcell.workflows.reproduce import worker_count
-    from softcell.workflows.study import mark_study
+    from softcell.workflows.study import run_points
 
     design.check()
     parameters = dict(parameters or {})
     for key in ("radius", "duration", "obstacles", "sample_every", "sample_every_late"):
         if key in parameters:
             raise SoftcellError(f"parameter {key!r} is set by the constriction study itself")
-    configs = {r: _config(design, r, parameters) for r in design.radii}
     out = check_output(Path(out), "report", directory=True)
-    registry = default_registry()
-    for radius, config in configs.items():  # every bad value, for every radius, before any run
-        plan(
-            config,
-            _folder(out, radius),
-            realizations=design.realizations,
-            seed=seed,
-            registry=registry,
-        )
-    mark_study(out, "study constriction", seed, overwrite)
-    say = log or (lambda _: None)
-    workers = worker_count(workers, None)
-    with cluster_client(workers) if workers > 1 else nullcontext() as client:
-        for i, (radius, config) in enumerate(configs.items()):
-            say(f"radius {i + 1}/{len(configs)}: R = {radius:g} cm, {len(design.gaps)} gaps")
-            simulate(
-                config,
-                _folder(out, radius),
-                realizations=design.realizations,
-                seed=seed,
-                client=client,
-                progress=progress,
-                overwrite=overwrite,
-                log=log,
-            )
+    points = {
+        _folder(out, r): (f"R = {r:g} cm, {len(design.gaps)} gaps", _config(design, r, parameters))
+        for r in design.radii
+    }
+    run_points(
+        out,
+        points,
+        command="study constriction",
+        realizations=design.realizations,
+        seed=seed,
+        workers=workers,
+        overwrite=overwrite,
+        progress=progress,
+        log=log,
+    )
     return summarize(out, design, seed, parameters)
 
 

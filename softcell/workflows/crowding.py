@@ -21,7 +21,6 @@ import json
 import math
 import os
 from collections.abc import Callable
-from contextlib import nullcontext
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -194,46 +193,33 @@ def crowding(
         lattice that does not fit its box (checked for every point before anything runs),
         or a directory another study or seed made.
     """
-    from softcell.core.components.registry import default_registry
     from softcell.io.files import check_output
-    from softcell.workflows.cluster import cluster_client
-    from softcell.workflows.ensemble import plan, simulate
-    from softcell.workflows.reproduce import worker_count
-    from softcell.workflows.study import mark_study
+    from softcell.workflows.study import run_points
 
     design.check()
     parameters = dict(parameters or {})
     for key in ("radius", "duration"):
         if key in parameters:
             raise SoftcellError(f"parameter {key!r} is set by the crowding study itself")
-    configs = _configs(design, parameters)
     out = check_output(Path(out), "report", directory=True)
-    registry = default_registry()
-    for (radius, phi), config in configs.items():  # every point, before any run
-        plan(
+    points = {
+        _folder(out, radius, phi): (
+            f"R = {radius:g} cm, " + ("alone" if phi is None else f"area fraction {phi:g}"),
             config,
-            _folder(out, radius, phi),
-            realizations=design.realizations,
-            seed=seed,
-            registry=registry,
         )
-    mark_study(out, "study crowding", seed, overwrite)
-    say = log or (lambda _: None)
-    workers = worker_count(workers, None)
-    with cluster_client(workers) if workers > 1 else nullcontext() as client:
-        for i, ((radius, phi), config) in enumerate(configs.items()):
-            what = "alone" if phi is None else f"area fraction {phi:g}"
-            say(f"point {i + 1}/{len(configs)}: R = {radius:g} cm, {what}")
-            simulate(
-                config,
-                _folder(out, radius, phi),
-                realizations=design.realizations,
-                seed=seed,
-                client=client,
-                progress=progress,
-                overwrite=overwrite,
-                log=log,
-            )
+        for (radius, phi), config in _configs(design, parameters).items()
+    }
+    run_points(
+        out,
+        points,
+        command="study crowding",
+        realizations=design.realizations,
+        seed=seed,
+        workers=workers,
+        overwrite=overwrite,
+        progress=progress,
+        log=log,
+    )
     return summarize(out, design, seed, parameters)
 
 

@@ -131,3 +131,47 @@ def run_variants(
             progress=progress,
             log=log,
         )
+
+
+def run_points(
+    out: Path,
+    points: dict[Path, tuple[str, Any]],
+    *,
+    command: str,
+    realizations: int,
+    seed: int,
+    workers: int | None,
+    overwrite: bool,
+    progress: bool,
+    log: Callable[[str], None] | None,
+) -> None:
+    """Run a grid study's points: each folder of ``points`` (under ``out``) gets its
+    (label, RunConfig) simulated with ``realizations`` from root ``seed``, resumable as
+    ``softcell simulate`` is. Every point is planned (every bad value, before any run)
+    before ``out`` is marked as the study ``command``'s; one local cluster serves them all."""
+    from contextlib import nullcontext
+
+    from softcell.core.components.registry import default_registry
+    from softcell.workflows.cluster import cluster_client
+    from softcell.workflows.ensemble import plan, simulate
+    from softcell.workflows.reproduce import worker_count
+
+    registry = default_registry()
+    for folder, (_, config) in points.items():
+        plan(config, folder, realizations=realizations, seed=seed, registry=registry)
+    mark_study(out, command, seed, overwrite)
+    say = log or (lambda _: None)
+    workers = worker_count(workers, None)
+    with cluster_client(workers) if workers > 1 else nullcontext() as client:
+        for i, (folder, (label, config)) in enumerate(points.items()):
+            say(f"point {i + 1}/{len(points)}: {label}")
+            simulate(
+                config,
+                folder,
+                realizations=realizations,
+                seed=seed,
+                client=client,
+                progress=progress,
+                overwrite=overwrite,
+                log=log,
+            )
