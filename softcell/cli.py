@@ -468,8 +468,8 @@ def _cmd_study(args: argparse.Namespace) -> int:
     given = [f for f in flags if getattr(args, f)]
     if given:
         raise SoftcellError(
-            f"--{given[0]} belongs to 'study constriction' or 'study crowding'; 'study "
-            "sensitivity' runs the quick design"
+            f"--{given[0]} belongs to the grid studies (constriction, crowding, "
+            "strategies); 'study sensitivity' runs the quick design"
         )
     variants = (
         VARIANTS
@@ -493,15 +493,18 @@ def _cmd_study(args: argparse.Namespace) -> int:
 GRID_STUDIES = {
     "constriction": ("softcell.workflows.constriction", ("gaps",)),
     "crowding": ("softcell.workflows.crowding", ("fractions", "cells")),
+    "strategies": ("softcell.workflows.strategies", ("strategies",)),
 }
 #: Flags every grid study takes over its design.
 GRID_FLAGS = ("quick", "radii", "realizations", "duration")
+#: The flags that belong to one grid study alone.
+OWN_FLAGS = tuple(f for _, own in GRID_STUDIES.values() for f in own)
 
 
 def _cmd_grid_study(args: argparse.Namespace) -> int:
-    """``softcell study constriction`` or ``crowding``: the full or quick grid, changed by
-    the grid flags given."""
-    from softcell.workflows import constriction, crowding
+    """``softcell study constriction``, ``crowding`` or ``strategies``: the full or quick
+    grid, changed by the grid flags given."""
+    from softcell.workflows import constriction, crowding, strategies
 
     own = GRID_STUDIES[args.study][1]
     if args.only is not None:
@@ -512,20 +515,25 @@ def _cmd_grid_study(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     if foreign:
         raise SoftcellError(f"--{foreign[0]} does not belong to 'study {args.study}'")
-    module = {"constriction": constriction, "crowding": crowding}[args.study]
+    module = {"constriction": constriction, "crowding": crowding, "strategies": strategies}[
+        args.study
+    ]
     design = module.QUICK if args.quick else module.FULL
     changes = {
         "radii": _numbers("--radii", args.radii),
         "gaps": _numbers("--gaps", args.gaps),
         "fractions": _numbers("--fractions", args.fractions),
         "cells": args.cells,
+        "strategies": None
+        if args.strategies is None
+        else [n.strip() for n in args.strategies.split(",") if n.strip()],
         "realizations": args.realizations,
         "duration": args.duration,
     }
     changes = {
         k: tuple(v) if isinstance(v, list) else v
         for k, v in changes.items()
-        if v is not None and (k in own or k not in ("gaps", "fractions", "cells"))
+        if v is not None and (k in own or k not in OWN_FLAGS)
     }
     if changes:
         design = replace(design, name=f"{design.name}, changed", **changes)
@@ -545,19 +553,22 @@ def _cmd_grid_study(args: argparse.Namespace) -> int:
 def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
     p.add_argument(
         "study",
-        choices=["sensitivity", "constriction", "crowding"],
+        choices=["sensitivity", "constriction", "crowding", "strategies"],
         help="sensitivity: the quick design over one of the paper's unknowns at a "
         "time (bot size, k, Lambda_c, lambda, rotation, friction); constriction: how often "
         "one cell passes a gap in a wall, against the gap's width and R; crowding: the cells' "
-        "D hat and <tau_g> against area fraction and R",
+        "D hat and <tau_g> against area fraction and R; strategies: D hat, <tau_g>, <tau_s> "
+        "and shape index against R for each locomotion strategy",
     )
     p.add_argument(
         "--quick",
         action="store_true",
-        help="constriction and crowding: a look (constriction ~1 min, crowding ~1 h on 2 "
-        "cores) instead of the full grid (20 min; ~12 h)",
+        help="the grid studies: a look (constriction ~1 min, crowding ~1 h, strategies "
+        "~MINUTES_QUICK min on 2 cores) instead of the full grid (20 min; ~12 h; ~MINUTES_FULL)",
     )
-    grid = p.add_argument_group("constriction and crowding grids (over the full or --quick design)")
+    grid = p.add_argument_group(
+        "constriction, crowding and strategies grids (over the full or --quick design)"
+    )
     grid.add_argument("--radii", metavar="R1,R2,...", help="cell radii R (cm)")
     grid.add_argument(
         "--gaps",
@@ -568,6 +579,12 @@ def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
         "--fractions", metavar="F1,F2,...", help="crowding: area fractions, in (0, 0.785)"
     )
     grid.add_argument("--cells", type=int, help="crowding: cells per box (a square number)")
+    grid.add_argument(
+        "--strategies",
+        metavar="P1,P2,...",
+        help="strategies: driving protocols (default: run_and_tumble, graspion, "
+        "bump_and_turn, active_brownian, chiral)",
+    )
     grid.add_argument("--realizations", type=int, help="realizations per grid point")
     grid.add_argument("--duration", type=float, help="duration of each realization (s)")
     p.add_argument(

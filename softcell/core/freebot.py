@@ -120,3 +120,32 @@ def renewal_diffusion(params: Parameters, pivot: str | None = None) -> float:
         w = 0.5 * (terms[0][1] + terms[1][1])
         b2 = 0.5 * (terms[0][2] + terms[1][2])
     return float((b2 + 2 * (w * m / (1 - c)).real) / (4 * 2 * mean_tau))
+
+
+def firmware_diffusion(
+    speed: float, turn_rate: float, durations: np.ndarray, pivot_ccw: float, pivot_cw: float
+) -> float:
+    """The renewal formula above for a bot whose runs and tumbles last one of ``durations``
+    (s, equally likely, drawn independently) and whose tumbles pivot on the inner side of
+    the turn, ``pivot_ccw`` (cm) off centre turning counterclockwise and ``pivot_cw`` (cm)
+    clockwise, at ``turn_rate`` (rad/s); runs go at ``speed`` (cm/s). The expectations are
+    exact finite sums over the durations and the two turn signs.
+
+    Returns
+    -------
+    float
+        The long-time diffusion coefficient D (cm^2/s, MSD -> 4 D t).
+    """
+    tau = np.asarray(durations, dtype=np.float64)
+    mean_tau, mean_tau2 = float(tau.mean()), float(np.mean(tau**2))
+    # The tumbles: both signs, each duration; p = s d_s i (1 - e^{i phi}), phi = s omega tau.
+    sign = np.concatenate([np.ones(tau.size), -np.ones(tau.size)])
+    offset = np.where(sign > 0, pivot_ccw, pivot_cw)
+    phi = sign * turn_rate * np.concatenate([tau, tau])
+    turn = np.exp(1j * phi)
+    p = sign * offset * 1j * (1 - turn)
+    c = turn.mean()
+    m = speed * mean_tau + p.mean()
+    w = speed * mean_tau * c + np.mean(np.conj(p) * turn)
+    b2 = speed**2 * mean_tau2 + 2 * speed * mean_tau * p.real.mean() + np.mean(np.abs(p) ** 2)
+    return float((b2 + 2 * (w * m / (1 - c)).real) / (4 * 2 * mean_tau))

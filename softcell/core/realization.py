@@ -181,16 +181,20 @@ def run_realization(
             + ("; rerun the same command to resume" if checkpoint else "")
         ) from None
     membrane_times, fine_times_ = sample_times(model.params), fine_times(model.params)
+    starts = state.get("starts")  # as the protocol's events shifted them
     return Record(
         membrane_times,
         grid.modes,
         grid.pose[membrane],
-        phase_at(schedule, membrane_times),
+        phase_at(schedule, membrane_times, starts),
         state,
         fine_times=fine_times_,
         fine_center=grid.center[fine],
         fine_pose=grid.pose[fine],
-        fine_phase=phase_at(schedule, fine_times_),
+        fine_phase=phase_at(schedule, fine_times_, starts),
+        event_times=None
+        if starts is None
+        else state["event_times"][: int(state["event_count"][0])].copy(),
     )
 
 
@@ -280,6 +284,7 @@ def record_dataset(
         extra_attrs=extra_attrs,
         scalar_coords=scalar_coords,
         fine=_fine_record(record, model),
+        events=None if record.event_times is None else record.event_times[None],
     )
 
 

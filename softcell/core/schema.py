@@ -134,6 +134,16 @@ VARIABLES: dict[str, VariableSpec] = {
 #: ``sample_every`` over the whole run, on their own time axis ``fine_time``, so that
 #: analyses of the bodies (the MSD at every lag) use one record (docs/model.md §6). Absent
 #: from tracked videos and from files of softcell before 0.3.
+#: When a protocol's state events ended phases (optional: only protocols with events).
+EVENT_COORDINATE = VariableSpec("event", ("event",), "i", "1", "index of a state event")
+EVENT_TIME = VariableSpec(
+    "event_time",
+    ("realization", "event"),
+    "f",
+    "s",
+    "time at which a state event of the driving protocol ended a phase (NaN: no more events)",
+)
+
 FINE_COORDINATE = VariableSpec(
     "fine_time", ("fine_time",), "f", "s", "time of the bodies' fine record"
 )
@@ -564,6 +574,9 @@ def problems(ds: xr.Dataset) -> list[str]:
     for spec in (*COORDINATES.values(), *VARIABLES.values()):
         found.extend(_variable_problems(ds, spec))
     found.extend(_fine_problems(ds))
+    if "event" in ds.dims or EVENT_TIME.name in ds.variables:
+        for spec in (EVENT_COORDINATE, EVENT_TIME):
+            found.extend(_variable_problems(ds, spec))
     if "cell" in ds.dims:
         for spec in (CELL_COORDINATE, *DOMAIN_VARIABLES.values()):
             found.extend(_variable_problems(ds, spec))
@@ -685,6 +698,7 @@ def simulation_dataset(
     scalar_coords: Sequence[str] = ("radius",),
     fine: Mapping[str, np.ndarray] | None = None,
     domain: Mapping[str, Any] | None = None,
+    events: np.ndarray | None = None,
 ) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
@@ -719,6 +733,9 @@ def simulation_dataset(
         For an assembly of cells: ``box`` (cm, NaN for the open plane), ``boundary`` (str)
         and ``start_x``, ``start_y`` (float64[C], cm); every variable then has a ``cell`` dim
         after its time dim ([R, T, C, node] for the membrane, [R, T, C] for the bodies).
+    events : float64[R, E], optional
+        The times (s) at which the protocol's state events ended phases, NaN-padded
+        (``event_time``; only for a protocol with events).
     """
     if cell_x is None:
         cell_x = membrane_x.mean(axis=-1)
@@ -760,6 +777,14 @@ def simulation_dataset(
             if spec.name == "bot_phase_fine":
                 values = values.astype(np.int8)
             data_vars[name] = (dims(spec.dims), values, spec.cf_attrs())
+    if events is not None:
+        events = np.asarray(events, dtype=np.float64)
+        coords["event"] = (
+            "event",
+            np.arange(events.shape[-1], dtype=np.int64),
+            EVENT_COORDINATE.cf_attrs(),
+        )
+        data_vars[EVENT_TIME.name] = (EVENT_TIME.dims, events, EVENT_TIME.cf_attrs())
     if domain is not None:
         cells = len(domain["start_x"])
         coords["cell"] = ("cell", np.arange(cells, dtype=np.int64), CELL_COORDINATE.cf_attrs())

@@ -387,7 +387,7 @@ def _check_one_request(
 
 #: The time axes of a simulation (the membrane's samples, the bodies' fine record), which
 #: differ in length between the points of a sweep over durations.
-TIME_AXES = ("time", "fine_time")
+TIME_AXES = ("time", "fine_time", "event")
 
 
 def _on_common_axes(parts: list[xr.Dataset]) -> list[xr.Dataset]:

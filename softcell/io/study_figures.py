@@ -328,3 +328,38 @@ def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequenc
     axes[0].legend(fontsize=8)
     axes[2].legend(fontsize=8)
     _save(fig, path, dpi=110)
+
+
+def strategies_figure(
+    path: Path, points: Sequence[dict[str, Any]], strategies: Sequence[str]
+) -> None:
+    """``softcell study strategies``'s figure at ``path``: D hat (cm^2/s), <tau_g> and
+    <tau_s> (s) and the shape index against R (cm), one line per strategy with standard
+    errors across realizations."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.8), constrained_layout=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    panels = (
+        ("msd_slope", "D hat (cm$^2$/s)", "(a) long-time D hat of the cell"),
+        ("mean_go_duration", "<tau_g> (s)", "(b) mean go duration"),
+        ("mean_stop_duration", "<tau_s> (s)", "(c) mean stop duration"),
+        ("ipr_mean", "shape index P / sqrt(A)", "(d) mean shape index"),
+    )
+    for i, strategy in enumerate(strategies):
+        mine = [p for p in points if p["strategy"] == strategy and not p.get("missing")]
+        radius = [p["radius"] for p in mine]
+        for ax, (key, label, title) in zip(axes, panels, strict=True):
+            ax.errorbar(
+                radius, _values(mine, key), yerr=_values(mine, f"{key}_sem"), fmt="o-",
+                color=colours[i % len(colours)], capsize=3, label=strategy,
+            )  # fmt: skip
+            ax.set(xlabel="membrane radius R (cm)", ylabel=label, title=title)
+    for ax in axes[:3]:
+        ax.set_ylim(bottom=0)
+    axes[3].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
+    axes[0].legend(fontsize=8)
+    _save(fig, path, dpi=110)

@@ -11,8 +11,8 @@ Contracts (subclass one per component)
     :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`FrictionLaw`, :class:`Integrator`,
     :class:`StopGoDetector`, :class:`PairTerm` (how two cells' membranes meet), their base
     :class:`Component`; what an integrator returns:
-    :class:`Stepper`; what a protocol draws: :class:`Schedule`; what an integrator composes:
-    :class:`Model`.
+    :class:`Stepper`; what a protocol draws: :class:`Schedule`; what its event kernel senses:
+    :class:`Sense`; what an integrator composes: :class:`Model`.
 Parameters
     :class:`ParameterSpec` declares one (default, unit, range); :data:`MODEL_PARAMETERS`
     holds the model's own, to reuse by listing them; :class:`Parameters` is what a component
@@ -43,6 +43,7 @@ from softcell.core.components.contracts import (
     Integrator,
     PairTerm,
     Schedule,
+    Sense,
     Stepper,
     StopGoDetector,
 )
@@ -74,6 +75,7 @@ __all__ = [
     "ParameterSpec",
     "Parameters",
     "Schedule",
+    "Sense",
     "Stepper",
     "StopGoDetector",
     "hookimpl",

@@ -16,6 +16,7 @@ from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import Model, Stepper, explicit_decay_rate, nonlinear_friction, stubs
 from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.state import event_state
 from softcell.core.engine.compose import compose_bot, template
 from softcell.core.params import MODEL_PARAMETERS
 from softcell.errors import ParameterError
@@ -47,6 +48,8 @@ class ExplicitEulerStepper(Stepper):
                 "bot_forces": compose_bot(model.terms)[0]
                 if model.bot_terms
                 else stubs.no_bot_forces,
+                "event": model.event if model.event is not None else stubs.no_event,
+                "HAS_EVENT": model.event is not None,
             },
             f"{' + '.join(t.name for t in model.terms) or 'none'}; {model.protocol.name}"
             + (f"; {model.friction.name}" if law else ""),
@@ -61,6 +64,7 @@ class ExplicitEulerStepper(Stepper):
             "time": np.zeros(1),
             "step": np.zeros(1, dtype=np.int64),
             "phase_index": np.zeros(1, dtype=np.int64),
+            **event_state(self.model, schedule),
         }
 
     def advance(self, state, schedule: Schedule, t_end: float) -> None:
@@ -75,7 +79,7 @@ class ExplicitEulerStepper(Stepper):
             int(state["phase_index"][0]),
             int(target - state["step"][0]),
             self.dt,
-            schedule.start,
+            state.get("starts", schedule.start),
             schedule.phase,
             schedule.data,
             m.coefficients,
@@ -86,9 +90,14 @@ class ExplicitEulerStepper(Stepper):
             m.nodes,
             m.has_membrane,
             self.law,
+            (state.get("event_times", _NO_EVENTS), state.get("event_count", _NO_COUNT)),
         )
         state["step"][0], state["phase_index"][0] = step, p
         state["time"][0] = step * self.dt
+
+
+_NO_EVENTS = np.zeros(0)
+_NO_COUNT = np.zeros(1, dtype=np.int64)
 
 
 class ExplicitEuler(Integrator):

@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from softcell.core.components.contracts import Integrator, Schedule
+from softcell.core.components.contracts import SENSE_SIZE, Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import (
     Model,
@@ -32,6 +32,7 @@ from softcell.core.engine import (
     stubs,
 )
 from softcell.core.engine.compiled import compile_module
+from softcell.core.engine.state import event_state
 from softcell.core.engine.compose import compose_bot, compose_pair_laws, template
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
@@ -50,6 +51,7 @@ from softcell.plugins.rodas4_method import (  # shared with the template rodas4_
     STEPS,
     Coefficients,
     Control,
+    EventLog,
     LoopState,
     PhaseTable,
     Problem,
@@ -117,6 +119,7 @@ Workspace = namedtuple(
         "drag",
         "law",
         "bot_hpp",
+        "sense",
     ],
 )
 
@@ -188,6 +191,7 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         drag=np.zeros(3),
         law=nonlinear_friction.model_workspace(model, nu),
         bot_hpp=np.zeros((3, 3)),
+        sense=np.zeros(SENSE_SIZE),
     )
 
 
@@ -275,6 +279,8 @@ def compiled_loop(model: Model) -> tuple:
             "bot_hessians_f": other.bot_hessians,
             "drive": model.drive,
             "drive_jacobian": fd_drive_jacobian(model.drive),
+            "event": model.event if model.event is not None else stubs.no_event,
+            "HAS_EVENT": model.event is not None,
             "LAW": law is not None,
             "friction_velocity": law.velocity if law else stubs.no_friction_velocity,
             "friction_jacobian": law.jacobian if law else stubs.no_friction_jacobian,
@@ -299,6 +305,14 @@ def compiled_group(model: Model):
     if not model.pair_terms:
         raise ParameterError(
             "pair_terms", "[]", "must name at least one pair term for an assembly", "1"
+        )
+    if model.event is not None:
+        raise ParameterError(
+            "driving_protocol",
+            model.protocol.name,
+            "must have no state events for an assembly of cells (the group loop does not "
+            "locate them yet)",
+            "1",
         )
     rhs, jacobian, _ = compiled_loop(model)
     module = compile_module(
@@ -396,6 +410,10 @@ def unpack(u: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
     return u[:m] + 1j * u[m : 2 * m], u[2 * m : 2 * m + 3].copy()
 
 
+_NO_EVENTS = np.zeros(0)
+_NO_COUNT = np.zeros(1, dtype=np.int64)
+
+
 def _rewind(state: dict, schedule: Schedule) -> None:
     """Bring a cell's state back to its last sample (``state["time"]``) if its steps ran
     ahead of it (rodas4 samples its continuous extension): the state there, its phase then,
@@ -457,6 +475,7 @@ class Rodas4Stepper(Stepper):
             "phase_index": np.zeros(1, dtype=np.int64),
             "counters": np.zeros(4, dtype=np.int64),
             "dense": np.zeros((4, u.size)),
+            **event_state(self.model, schedule),
         }
 
     def advance(self, state, schedule: Schedule, t_end: float) -> None:
@@ -479,11 +498,12 @@ class Rodas4Stepper(Stepper):
             ),
             times,
             samples,
-            PhaseTable(schedule.start, schedule.phase, schedule.data),
+            PhaseTable(state.get("starts", schedule.start), schedule.phase, schedule.data),
             self.problem,
             Control(self.atol, self.rtol, self.max_step),
             Coefficients(RODAS4.a, RODAS4.c, RODAS4.dense),
             self.ws,
+            EventLog(state.get("event_times", _NO_EVENTS), state.get("event_count", _NO_COUNT)),
         )
         if status != OK:
             t = state["clock"][T]

@@ -102,6 +102,14 @@ class PhaseTable(NamedTuple):
     data: np.ndarray
 
 
+class EventLog(NamedTuple):
+    """Where the protocol's events ended phases: their times (s, the first ``count[0]``
+    slots) and the phases' start times as shifted by them (s)."""
+
+    times: np.ndarray
+    count: np.ndarray
+
+
 class Control(NamedTuple):
     """Step control: absolute (cm, rad) and relative tolerances, and the largest step (s)."""
 

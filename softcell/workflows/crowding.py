@@ -25,8 +25,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from softcell.errors import SoftcellError
 
 #: Smallest starting gap between rings (cm): the densest lattice of the full grid
@@ -230,23 +228,11 @@ def measure_point(folder: Path, realizations: int) -> dict[str, Any]:
     """One point from its realizations: each analysed alone (pooled over its cells, the
     first :data:`DISCARD` s dropped), then the mean and standard error across realizations
     of the cells' D hat (cm^2/s), <tau_g> (s) and shape index P / sqrt(A)."""
-    from softcell.core.analysis import analyze
-    from softcell.io.netcdf import open_dataset
+    from softcell.workflows.study import realization_means
 
-    values: dict[str, list[float]] = {"msd_slope": [], "mean_go_duration": [], "ipr_mean": []}
-    for r in range(realizations):
-        ds = open_dataset(folder / f"point000_realization{r:04d}.nc")
-        analysis = analyze(ds, {"discard": DISCARD})
-        for key in values:
-            value = analysis[key]
-            values[key].append(float(value.sel(body="cell") if "body" in value.dims else value))
-    point: dict[str, Any] = {}
-    for key, each in values.items():
-        v = np.array(each)
-        point[key] = float(v.mean())
-        point[f"{key}_sem"] = float(v.std(ddof=1) / math.sqrt(v.size))
-        point[f"{key}_each"] = each
-    return point
+    return realization_means(
+        folder, realizations, ("msd_slope", "mean_go_duration", "ipr_mean"), DISCARD
+    )
 
 
 def measure(out: Path, design: CrowdingDesign) -> list[dict[str, Any]]:

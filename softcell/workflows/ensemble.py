@@ -138,6 +138,7 @@ def _check_assembly(assembly, config, points, realizations, seed, membrane, regi
             f"integrator {integrator!r} does not step groups of cells in contact: an assembly "
             "of more than one cell needs rodas4"
         )
+    _check_no_events(config, points, registry)
     for _, params in points:
         law = registry.get("friction_law", config.components["friction_law"])(params)
         if not law.linear:
@@ -155,6 +156,18 @@ def _check_assembly(assembly, config, points, realizations, seed, membrane, regi
         reach = max(registry.get("pair_term", n)(params).reach() for n in assembly.pair_terms)
         for r in range(realizations if assembly.placement == "random" else 1):
             starting_centres(params, assembly, seed, p, r, reach)
+
+
+def _check_no_events(config, points, registry) -> None:
+    """Refuse an assembly whose driving protocol has state events (the group loop does not
+    locate them)."""
+    name = config.components["driving_protocol"]
+    for _, params in points[:1]:
+        if registry.get("driving_protocol", name)(params).event_kernel() is not None:
+            raise SoftcellError(
+                f"driving protocol {name!r} ends phases on state events, which an assembly "
+                "of cells does not support yet: run it one cell at a time"
+            )
 
 
 def _check_total(points: list, realizations: int, out: Path) -> None:

@@ -10,10 +10,13 @@ sensitivity`` are studies; this module holds what they share.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from softcell.core.runconfig import DEFAULT_COMPONENTS
 from softcell.errors import SoftcellError
@@ -175,3 +178,29 @@ def run_points(
                 overwrite=overwrite,
                 log=log,
             )
+
+
+def realization_means(
+    folder: Path, realizations: int, keys: tuple[str, ...], discard: float
+) -> dict[str, Any]:
+    """One point of a grid study from its realization files: each analysed alone (the
+    first ``discard`` s dropped; an assembly's pooled over its cells), then, for each
+    analysis variable of ``keys`` (its cell value), the mean over realizations, ``<key>_sem``
+    the standard error across them and ``<key>_each`` the values, in the variable's unit."""
+    from softcell.core.analysis import analyze
+    from softcell.io.netcdf import open_dataset
+
+    values: dict[str, list[float]] = {key: [] for key in keys}
+    for r in range(realizations):
+        ds = open_dataset(folder / f"point000_realization{r:04d}.nc")
+        analysis = analyze(ds, {"discard": discard})
+        for key in keys:
+            value = analysis[key]
+            values[key].append(float(value.sel(body="cell") if "body" in value.dims else value))
+    point: dict[str, Any] = {}
+    for key, each in values.items():
+        v = np.array(each)
+        point[key] = float(v.mean())
+        point[f"{key}_sem"] = float(v.std(ddof=1) / math.sqrt(v.size))
+        point[f"{key}_each"] = each
+    return point

@@ -14,6 +14,7 @@ import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -294,12 +295,43 @@ class Schedule:
             raise ValueError("schedule start times must begin at 0 s and increase strictly")
 
 
+class Sense(IntEnum):
+    """What a protocol's event kernel senses: the indices of its ``sense`` vector
+    (float64[9]).
+
+    ``X``, ``Y``, ``HEADING``: the bot's pose (cm, cm, rad). ``FORCE_X``, ``FORCE_Y``,
+    ``TORQUE``: the force (N) and the torque (N cm, about the bot's centre) of every energy
+    term on the bot (its membrane's contact, walls and posts; the drive and the friction
+    excluded). ``DISTANCE``: from the bot's centre to the nearest point of its membrane (cm;
+    inf for a free bot), over the curve sampled at 8 (2 Lc + 1) points. ``TIME`` and
+    ``PHASE_TIME``: the time and the time since the current phase began (s).
+    """
+
+    X = 0
+    Y = 1
+    HEADING = 2
+    FORCE_X = 3
+    FORCE_Y = 4
+    TORQUE = 5
+    DISTANCE = 6
+    TIME = 7
+    PHASE_TIME = 8
+
+
+#: The length of the ``sense`` vector.
+SENSE_SIZE = len(Sense)
+
+
 class DrivingProtocol(Component):
     """The bot's internal drive: a phase schedule and a force and torque in each phase
-    (docs/model.md §5)."""
+    (docs/model.md §5), and optionally a state event that ends a phase early
+    (:meth:`event_kernel`)."""
 
     kind = "driving_protocol"
-    kernels = {"drive_kernel": f"void(int8, float64, {', '.join([VECTOR] * 4)})"}
+    kernels = {
+        "drive_kernel": f"void(int8, float64, {', '.join([VECTOR] * 4)})",
+        "event_kernel": f"float64(int8, float64, {VECTOR}, {VECTOR})",
+    }
 
     @abstractmethod
     def schedule(self, rng: np.random.Generator, duration: float) -> Schedule:
@@ -337,6 +369,26 @@ class DrivingProtocol(Component):
         kernel writes the drive force x, y (N) and torque about the bot's center (N cm) into
         ``out[0:3]``.
         """
+
+    def event_kernel(self) -> Callable[..., float] | None:
+        """Return the compiled (``numba.njit``) event kernel, or None (the default: every
+        phase lasts as scheduled).
+
+        Kernel signature::
+
+            kernel(phase, data, sense, coefficients) -> float
+
+        ``phase``, ``data`` and ``coefficients`` as for :meth:`drive_kernel`; ``sense``:
+        float64[9], what the bot senses, laid out by the indices of :class:`Sense`
+        (pose in cm and rad, force on the bot in N, torque in N cm, distance
+        to the membrane in cm, time and time in the phase in s). The phase ends at the first time the
+        returned value is >= 0: at once if it is at the phase's start, else where it
+        crosses zero, located by ``rodas4`` on its continuous extension to 1e-9 s and by
+        ``explicit_euler`` to its step. The phases after it then start that much earlier
+        than scheduled: :meth:`schedule` gives each phase with an event its longest
+        duration. The event times are stored in the output (``event_time``).
+        """
+        return None
 
 
 class FrictionLaw(Component):

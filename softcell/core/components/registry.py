@@ -43,6 +43,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.plugins.obstacles",
     "softcell.plugins.run_and_tumble",
     "softcell.plugins.constant_push",
+    "softcell.plugins.strategies",
     "softcell.plugins.friction_laws",
     "softcell.plugins.explicit_euler",
     "softcell.plugins.rodas4",

@@ -97,6 +97,8 @@ class Model:
     origins: dict[str, str] = field(default_factory=dict)
     #: The pair terms between the membranes of an assembly's cells (none for one cell).
     pair_terms: list[PairTerm] = field(default_factory=list)
+    #: The protocol's compiled event kernel, or None (:meth:`DrivingProtocol.event_kernel`).
+    event: Callable[..., float] | None = None
 
     @property
     def pair_reach(self) -> float:
@@ -223,6 +225,7 @@ def build_model(
         },
         origins=origins,
         pair_terms=pairs,
+        event=drive.event_kernel(),
     )
     probe_components(model)  # a kernel writing NaN is named here, before anything steps
     return model

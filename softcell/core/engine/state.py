@@ -83,9 +83,14 @@ def sampling_plan(params: Parameters) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return grid, index[: membrane.size], index[membrane.size :]
 
 
-def phase_at(schedule: Schedule, times: np.ndarray) -> np.ndarray:
-    """Phase code (int8) active at each time (s): the last phase started at or before it."""
-    index = np.searchsorted(schedule.start, times, side="right") - 1
+def phase_at(
+    schedule: Schedule, times: np.ndarray, starts: np.ndarray | None = None
+) -> np.ndarray:
+    """Phase code (int8) active at each time (s): the last phase started at or before it,
+    by the schedule's start times or by ``starts`` (s), the start times as state events
+    shifted them (non-decreasing: a phase an event ended at its start lasts 0 s)."""
+    begin = schedule.start if starts is None else starts
+    index = np.searchsorted(begin, times, side="right") - 1
     return schedule.phase[np.clip(index, 0, None)]
 
 
@@ -126,6 +131,7 @@ class Record:
     fine_center: np.ndarray | None = None  # complex128[F]: g_0, cm
     fine_pose: np.ndarray | None = None  # float64[F, 3]
     fine_phase: np.ndarray | None = None  # int8[F]
+    event_times: np.ndarray | None = None  # float64[E], s: phases ended by state events
 
 
 def check_state(
@@ -172,3 +178,15 @@ def initial_state(
     schedule = model.protocol.schedule(rng, float(model.params.duration))
     radius = equilibrium_radius(model.params) if model.has_membrane else 0.0
     return circle_modes(radius, model.cutoff), np.array([0.0, 0.0, heading]), schedule
+
+
+def event_state(model: Model, schedule: Schedule) -> dict[str, np.ndarray]:
+    """The state a protocol's events need: the phases' start times, which events shift
+    (s), room for an event per phase (s) and the count logged; empty without events."""
+    if model.event is None:
+        return {}
+    return {
+        "starts": np.array(schedule.start, dtype=np.float64),
+        "event_times": np.full(len(schedule.start), np.nan),
+        "event_count": np.zeros(1, dtype=np.int64),
+    }

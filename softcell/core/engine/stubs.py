@@ -31,3 +31,9 @@ def no_bot_forces(pose, context, coefficients, dpose):
 def no_bot_hessians(pose, context, coefficients, steps, pose_tmp, plus, minus, hpp):
     """Stands for the second derivatives of the bot's own energies (there are none): adds
     nothing to ``hpp``."""
+
+
+@njit(**JIT)
+def no_event(phase, datum, sense, coefficients):
+    """Stands for a protocol's event kernel (it has none): never ends a phase."""
+    return -1.0

@@ -4,8 +4,8 @@
 Bound: ``partials`` (the composed energy terms), ``drive`` (the protocol's kernel), ``LAW``
 (whether the friction law is nonlinear; then ``friction_velocity`` is its compiled velocity,
 from ``core/engine/templates/friction_modes.py``, and ``mobility`` is 1), ``HAS_BOT`` (whether
-some term has an energy of the bot alone; then ``bot_forces`` is their sum) and
-``JIT_FLAGS``.
+some term has an energy of the bot alone; then ``bot_forces`` is their sum), ``event`` and
+``HAS_EVENT`` (the protocol's event kernel, and whether it has one) and ``JIT_FLAGS``.
 """
 # ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
@@ -25,7 +25,39 @@ BOUND = (
     "friction_velocity",
     "HAS_BOT",
     "bot_forces",
+    "event",
+    "HAS_EVENT",
 )
+
+
+@njit(**JIT_FLAGS)
+def end_events(t, p, starts, phases, data, pose, drag, x, y, membrane, coefficients, log):
+    """End phase p, and any following phase, while the event holds at time t (s): the later
+    phases start that much earlier, each end is logged. ``drag`` (N, N cm) is minus the
+    energies' force and torque on the bot. Returns the phase index."""
+    sense = np.empty(9)
+    for c in range(3):
+        sense[c] = pose[c]
+        sense[3 + c] = -drag[c]
+    best = np.inf
+    if membrane:
+        for i in range(x.size):
+            best = min(best, math.hypot(x[i] - pose[0], y[i] - pose[1]))
+    sense[6] = best
+    sense[7] = t
+    times, count = log
+    while p + 1 < starts.size:
+        sense[8] = t - starts[p]
+        if event(phases[p], data[p], sense, coefficients) < 0.0:
+            break
+        shift = t - starts[p + 1]
+        for q in range(p + 1, starts.size):
+            starts[q] += shift
+        if count[0] < times.size:
+            times[count[0]] = t
+            count[0] += 1
+        p += 1
+    return p
 
 
 @njit(**JIT_FLAGS)
@@ -47,6 +79,7 @@ def segment(
     n_nodes,
     membrane,
     law,
+    log,
 ):
     n = n_nodes
     spec = np.empty(n, dtype=np.complex128)
@@ -67,6 +100,7 @@ def segment(
     dpose = np.zeros(3)
     drive_out = np.zeros(3)
     bot_drag = np.zeros(3)
+    drag = np.zeros(3)
     weight = 2.0 * math.pi / n
     p = phase_index
     for _ in range(n_steps):
@@ -114,10 +148,17 @@ def segment(
                 friction_velocity(modes, fhat, law.vhat, law)
                 for j in range(modes.size):
                     fhat[j] = law.vhat[j]
-        drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)
         if HAS_BOT:
             bot_drag[:] = 0.0
             bot_forces(pose, context, coefficients, bot_drag)
+        if HAS_EVENT:
+            for j in range(3):
+                drag[j] = weight * dpose[j] + (bot_drag[j] if HAS_BOT else 0.0)
+            p = end_events(
+                t, p, starts, phases, data, pose, drag, x, y, membrane, drive_coefficients, log
+            )
+        drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)
+        if HAS_BOT:
             for j in range(3):
                 pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j] - bot_drag[j])
         else:

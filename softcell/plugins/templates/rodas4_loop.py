@@ -6,7 +6,8 @@ the continuous extension.
 Bound: ``forces_s``, ``jacobian_s`` (the smooth terms on the coarse grid), ``forces_f``,
 ``jacobian_f`` (the other terms on the N points), ``HAS_S``, ``ORDER_S``, ``HAS_F``,
 ``ORDER_F`` (whether each group has terms, and the highest curve derivative it needs),
-``drive``, ``drive_jacobian``, ``LAW`` (whether the friction law is nonlinear; then
+``drive``, ``drive_jacobian``, ``event``, ``HAS_EVENT`` (the protocol's event kernel,
+and whether it has one), ``LAW`` (whether the friction law is nonlinear; then
 ``friction_velocity`` and ``friction_jacobian`` are its compiled functions, from
 ``core/engine/templates/friction_modes.py``), ``HAS_BOT_S``, ``HAS_BOT_F`` (whether a group has
 energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
@@ -67,6 +68,8 @@ BOUND = (
     "bot_hessians_f",
     "drive",
     "drive_jacobian",
+    "event",
+    "HAS_EVENT",
     "LAW",
     "friction_velocity",
     "friction_jacobian",
@@ -168,10 +171,95 @@ def stage_rhs(y, out, args):
 
 
 @njit(**JIT_FLAGS)
-def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws):  # noqa: C901
+def membrane_distance(u, m, x, y):
+    """The distance (cm) from (x, y) to the membrane's curve of modes u[:m] + i u[m:2m],
+    sampled at 8 m points; inf without modes."""
+    lc = (m - 1) // 2
+    points = 8 * m
+    best = np.inf
+    for n in range(points):
+        xi = 2.0 * math.pi * n / points
+        zx = 0.0
+        zy = 0.0
+        for j in range(m):
+            c = math.cos((j - lc) * xi)
+            s = math.sin((j - lc) * xi)
+            zx += u[j] * c - u[m + j] * s
+            zy += u[j] * s + u[m + j] * c
+        best = min(best, math.hypot(zx - x, zy - y))
+    return best
+
+
+@njit(**JIT_FLAGS)
+def event_at(u, t, t_phase, phase, datum, problem, ws, scratch):
+    """The event kernel's value at the state u at time t (s), in a phase begun at t_phase
+    (s): evaluates the right-hand side into ``scratch`` for the force on the bot."""
+    rhs(u, phase, datum, scratch, problem, ws)
+    m = ws.modes.size
+    sense = ws.sense
+    for c in range(3):
+        sense[c] = u[2 * m + c]
+        sense[3 + c] = -ws.drag[c]
+    sense[6] = membrane_distance(u, m, u[2 * m], u[2 * m + 1]) if problem[5] else np.inf
+    sense[7] = t
+    sense[8] = t - t_phase
+    return event(phase, datum, sense, problem[2])
+
+
+@njit(**JIT_FLAGS)
+def locate(dense, t0, h, phase, datum, t_phase, problem, ws):
+    """The fraction of the last step [t0, t0 + h] (s) at which the event first reaches 0,
+    by the Illinois method on the continuous extension, to 1e-9 s; the state there is left
+    in ``ws.y``."""
+    lo, hi = 0.0, 1.0
+    dense_value(dense, 0.0, ws.y)
+    g_lo = event_at(ws.y, t0, t_phase, phase, datum, problem, ws, ws.ynew)
+    dense_value(dense, 1.0, ws.y)
+    g_hi = event_at(ws.y, t0 + h, t_phase, phase, datum, problem, ws, ws.ynew)
+    side = 0
+    for _ in range(200):
+        if (hi - lo) * h <= 1e-9:
+            break
+        if g_hi - g_lo > 0.0 and math.isfinite(g_hi - g_lo):
+            mid = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+            mid = min(max(mid, lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
+        else:
+            mid = 0.5 * (lo + hi)
+        dense_value(dense, mid, ws.y)
+        g = event_at(ws.y, t0 + mid * h, t_phase, phase, datum, problem, ws, ws.ynew)
+        if g >= 0.0:
+            hi, g_hi = mid, g
+            if side == 1:
+                g_lo *= 0.5
+            side = 1
+        else:
+            lo, g_lo = mid, g
+            if side == -1:
+                g_hi *= 0.5
+            side = -1
+    dense_value(dense, hi, ws.y)
+    return hi
+
+
+@njit(**JIT_FLAGS)
+def end_phase(starts, p, t, log):
+    """Phase p ends at t (s): the later phases start that much earlier; t is logged."""
+    if p + 1 < starts.size:
+        shift = t - starts[p + 1]
+        for q in range(p + 1, starts.size):
+            starts[q] += shift
+    n = log.count[0]
+    if n < log.times.size:
+        log.times[n] = t
+        log.count[0] = n + 1
+
+
+@njit(**JIT_FLAGS)
+def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, log):  # noqa: C901
     """Step until the clock reaches ``t_end`` (s), then write the state there into
-    ``sample``; returns a status code. ``state``, ``schedule``, ``problem``, ``control`` and
-    ``tableau`` are the records of :mod:`softcell.plugins.rodas4_method`."""
+    ``sample``; returns a status code. ``state``, ``schedule``, ``problem``, ``control``,
+    ``tableau`` and ``log`` are the records of :mod:`softcell.plugins.rodas4_method`; with an
+    event kernel, ``schedule.starts`` is shifted in place as events end phases."""
     u, clock, phase_index, counters, dense = state
     starts, phases, data = schedule
     atol, rtol, max_step = control
@@ -185,6 +273,17 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws):  
     mat = ws.mat
     eps = 1e-12 * (1.0 + abs(t_end))
     while t < t_end - eps:
+        if HAS_EVENT:
+            while p + 1 < starts.size and starts[p + 1] <= t:
+                p += 1
+            # A phase whose event holds as it begins ends at once.
+            while (
+                p + 1 < starts.size
+                and t <= starts[p]
+                and event_at(u, t, starts[p], phases[p], data[p], problem, ws, ws.f0) >= 0.0
+            ):
+                end_phase(starts, p, t, log)
+                p += 1
         t_switch = starts[p + 1] if p + 1 < starts.size else np.inf
         phase, datum = phases[p], data[p]
         rhs(u, phase, datum, ws.f0, problem, ws)
@@ -235,11 +334,21 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws):  
                 u[:] = ynew
                 clock[T_LAST] = t
                 clock[H_LAST] = h
-                if land:
-                    t = t_switch
+                t_new = t_switch if land else t + h
+                if (
+                    HAS_EVENT
+                    and p + 1 < starts.size
+                    and event_at(u, t_new, starts[p], phase, datum, problem, ws, ynew) >= 0.0
+                ):
+                    # The event crossed zero during this step: go on from where it did.
+                    frac = locate(dense, t, h, phase, datum, starts[p], problem, ws)
+                    t_new = t + frac * h
+                    u[:] = ws.y
+                    end_phase(starts, p, t_new, log)
                     p += 1
-                else:
-                    t = t + h
+                elif land:
+                    p += 1
+                t = t_new
                 clock[T] = t
                 clock[H_NEXT] = h_new
                 counters[STEPS] += 1
@@ -256,12 +365,14 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws):  
 
 
 @njit(**JIT_FLAGS)
-def integrate(state, targets, samples, schedule, problem, control, tableau, ws):
+def integrate(state, targets, samples, schedule, problem, control, tableau, ws, log):
     """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
     write the state there into the matching row of ``samples`` from the last step's
     continuous extension. Returns a status code."""
     for r in range(targets.size):
-        status = advance_to(state, targets[r], samples[r], schedule, problem, control, tableau, ws)
+        status = advance_to(
+            state, targets[r], samples[r], schedule, problem, control, tableau, ws, log
+        )
         if status != OK:
             return status
     return OK
