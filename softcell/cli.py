@@ -467,9 +467,13 @@ def _cmd_study(args: argparse.Namespace) -> int:
     flags = (*GRID_FLAGS, *(f for _, own in GRID_STUDIES.values() for f in own))
     given = [f for f in flags if getattr(args, f)]
     if given:
+        owners = [s for s, (_, own) in GRID_STUDIES.items() if given[0] in own] or list(
+            GRID_STUDIES
+        )
         raise SoftcellError(
-            f"--{given[0]} belongs to the grid studies (constriction, crowding, "
-            "strategies); 'study sensitivity' runs the quick design"
+            f"--{given[0]} belongs to "
+            + " or ".join(f"'study {s}'" for s in owners)
+            + "; 'study sensitivity' runs the quick design"
         )
     variants = (
         VARIANTS
@@ -501,6 +505,27 @@ GRID_FLAGS = ("quick", "radii", "realizations", "duration")
 OWN_FLAGS = tuple(f for _, own in GRID_STUDIES.values() for f in own)
 
 
+def _grid_changes(args: argparse.Namespace, own: tuple[str, ...]) -> dict[str, Any]:
+    """The design fields the grid flags given change (lists as tuples), for a study whose
+    own flags are ``own``."""
+    changes = {
+        "radii": _numbers("--radii", args.radii),
+        "gaps": _numbers("--gaps", args.gaps),
+        "fractions": _numbers("--fractions", args.fractions),
+        "cells": args.cells,
+        "strategies": None
+        if args.strategies is None
+        else [n.strip() for n in args.strategies.split(",") if n.strip()],
+        "realizations": args.realizations,
+        "duration": args.duration,
+    }
+    return {
+        k: tuple(v) if isinstance(v, list) else v
+        for k, v in changes.items()
+        if v is not None and (k in own or k not in OWN_FLAGS)
+    }
+
+
 def _cmd_grid_study(args: argparse.Namespace) -> int:
     """``softcell study constriction``, ``crowding`` or ``strategies``: the full or quick
     grid, changed by the grid flags given."""
@@ -519,22 +544,7 @@ def _cmd_grid_study(args: argparse.Namespace) -> int:
         args.study
     ]
     design = module.QUICK if args.quick else module.FULL
-    changes = {
-        "radii": _numbers("--radii", args.radii),
-        "gaps": _numbers("--gaps", args.gaps),
-        "fractions": _numbers("--fractions", args.fractions),
-        "cells": args.cells,
-        "strategies": None
-        if args.strategies is None
-        else [n.strip() for n in args.strategies.split(",") if n.strip()],
-        "realizations": args.realizations,
-        "duration": args.duration,
-    }
-    changes = {
-        k: tuple(v) if isinstance(v, list) else v
-        for k, v in changes.items()
-        if v is not None and (k in own or k not in OWN_FLAGS)
-    }
+    changes = _grid_changes(args, own)
     if changes:
         design = replace(design, name=f"{design.name}, changed", **changes)
     report = getattr(module, args.study)(
@@ -564,7 +574,7 @@ def _add_study(p: argparse.ArgumentParser, strict: bool, specs) -> None:
         "--quick",
         action="store_true",
         help="the grid studies: a look (constriction ~1 min, crowding ~1 h, strategies "
-        "~MINUTES_QUICK min on 2 cores) instead of the full grid (20 min; ~12 h; ~MINUTES_FULL)",
+        "~8 min on 2 cores) instead of the full grid (20 min; ~12 h; ~1.5 h)",
     )
     grid = p.add_argument_group(
         "constriction, crowding and strategies grids (over the full or --quick design)"

@@ -218,6 +218,7 @@ def test_an_event_run_resumes_to_the_same_values():
     np.testing.assert_array_equal(resumed.phase, whole.phase)
 
 
+@pytest.mark.slow
 def test_event_times_are_stored_and_the_same_across_workers(tmp_path):
     config = softcell.RunConfig(parameters={"radius": 5.0, "duration": 6.0}).updated(
         components={"driving_protocol": "bump_and_turn"}

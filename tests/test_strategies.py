@@ -73,7 +73,9 @@ def test_firmware_renewal_formula_against_exact_cycles():
     run, tumble = rng.choice(durations, n), rng.choice(durations, n)
     sign = rng.choice(np.array([-1.0, 1.0]), n)
     phi = sign * params.turn_rate * tumble
-    body = v * run + sign * np.where(sign > 0, params.pivot_ccw, params.pivot_cw) * 1j * (1 - np.exp(1j * phi))
+    body = v * run + sign * np.where(sign > 0, params.pivot_ccw, params.pivot_cw) * 1j * (
+        1 - np.exp(1j * phi)
+    )
     heading = np.concatenate([[0.0], np.cumsum(phi)[:-1]])
     # Turns anticorrelate strongly (<cos phi> = -0.66): the sum needs ~40 lags.
     sampled = diffusion_from_cycles(np.exp(1j * heading) * body, run + tumble, lags=40)

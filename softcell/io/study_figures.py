@@ -333,9 +333,9 @@ def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequenc
 def strategies_figure(
     path: Path, points: Sequence[dict[str, Any]], strategies: Sequence[str]
 ) -> None:
-    """``softcell study strategies``'s figure at ``path``: D hat (cm^2/s), <tau_g> and
-    <tau_s> (s) and the shape index against R (cm), one line per strategy with standard
-    errors across realizations."""
+    """``softcell study strategies``'s figure at ``path``: D hat (cm^2/s, log scale),
+    <tau_g> and <tau_s> (s) and the shape index against R (cm), one line per strategy with
+    standard errors across realizations."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -358,8 +358,9 @@ def strategies_figure(
                 color=colours[i % len(colours)], capsize=3, label=strategy,
             )  # fmt: skip
             ax.set(xlabel="membrane radius R (cm)", ylabel=label, title=title)
-    for ax in axes[:3]:
+    axes[0].set_yscale("log")  # the strategies' D hat span three decades
+    for ax in axes[1:3]:
         ax.set_ylim(bottom=0)
     axes[3].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=7, loc="center left")
     _save(fig, path, dpi=110)

@@ -16,8 +16,8 @@ from softcell.core.components.contracts import Integrator, Schedule
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.engine import Model, Stepper, explicit_decay_rate, nonlinear_friction, stubs
 from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.state import event_state
 from softcell.core.engine.compose import compose_bot, template
+from softcell.core.engine.state import event_state
 from softcell.core.params import MODEL_PARAMETERS
 from softcell.errors import ParameterError
 

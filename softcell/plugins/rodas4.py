@@ -32,8 +32,8 @@ from softcell.core.engine import (
     stubs,
 )
 from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.state import event_state
 from softcell.core.engine.compose import compose_bot, compose_pair_laws, template
+from softcell.core.engine.state import event_state
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
 from softcell.kernels.linalg import lu_workspace

@@ -82,7 +82,8 @@ class StrategiesDesign:
             )
 
 
-#: The stated grid: six radii, 6 realizations of 600 s per point.
+#: The stated grid: six radii, 6 realizations of 600 s per point (~1.5 h on 2 cores,
+#: estimated from the quick grid; not run).
 FULL = StrategiesDesign(
     name="full",
     strategies=STRATEGIES,
@@ -90,7 +91,7 @@ FULL = StrategiesDesign(
     realizations=6,
     duration=600.0,
 )
-#: A look: three radii, 3 realizations of 300 s.
+#: A look: three radii, 3 realizations of 300 s (8.2 min on 2 cores).
 QUICK = StrategiesDesign(
     name="quick",
     strategies=STRATEGIES,
@@ -262,7 +263,12 @@ def summarize(
 
 
 def _pm(point: dict[str, Any], key: str, spec: str) -> str:
-    return f"{point[key]:{spec}} ± {point[key + '_sem']:.2g}"
+    """The mean ± its error, with how many realizations defined it when not all did."""
+    n, every = point[f"{key}_n"], len(point[f"{key}_each"])
+    if n == 0:
+        return "undefined"
+    text = f"{point[key]:{spec}} ± {point[key + '_sem']:.2g}"
+    return text if n == every else f"{text} ({n} of {every})"
 
 
 def _markdown(result: dict[str, Any]) -> str:
@@ -273,7 +279,9 @@ def _markdown(result: dict[str, Any]) -> str:
         f"softcell {result['version']}, root seed {result['seed']}, design "
         f"{design['name']!r}: one cell, {design['realizations']} realizations of "
         f"{design['duration']:g} s per point, the first {DISCARD:g} s dropped. Values are "
-        "means over realizations with the standard error across them.",
+        "means over the realizations where the analysis defines them, with the standard "
+        "error across them; '(n of N)' marks a value only n realizations defined (a go phase "
+        "that outlasts the record leaves <tau_g> and D hat undefined).",
         "",
         "| strategy | R (cm) | D hat (cm2/s) | <tau_g> (s) | <tau_s> (s) | shape index |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -288,11 +296,19 @@ def _markdown(result: dict[str, Any]) -> str:
             f"{_pm(p, 'mean_go_duration', '.3g')} | {_pm(p, 'mean_stop_duration', '.3g')} | "
             f"{_pm(p, 'ipr_mean', '.4f')} |"
         )
-    lines += ["", "D hat at the largest radius over D hat at the smallest (softness as a knob):", ""]
+    lines += [
+        "",
+        "D hat at the largest radius over D hat at the smallest (softness as a knob):",
+        "",
+    ]
     for strategy, r in result["softness"].items():
+        error = (
+            f"± {r['sem']:.2f}"
+            if math.isfinite(r["sem"])
+            else "(no error: one realization defined D hat at an end)"
+        )
         lines.append(
-            f"- {strategy}: {r['ratio']:.2f} ± {r['sem']:.2f} (R = {r['from_cm']:g} -> "
-            f"{r['to_cm']:g} cm)"
+            f"- {strategy}: {r['ratio']:.2f} {error} (R = {r['from_cm']:g} -> {r['to_cm']:g} cm)"
         )
     lines += [
         "",

@@ -185,8 +185,10 @@ def realization_means(
 ) -> dict[str, Any]:
     """One point of a grid study from its realization files: each analysed alone (the
     first ``discard`` s dropped; an assembly's pooled over its cells), then, for each
-    analysis variable of ``keys`` (its cell value), the mean over realizations, ``<key>_sem``
-    the standard error across them and ``<key>_each`` the values, in the variable's unit."""
+    analysis variable of ``keys`` (its cell value), the mean over the realizations where it
+    is defined (finite), ``<key>_sem`` the standard error across them (NaN with fewer than
+    two), ``<key>_n`` how many they are and ``<key>_each`` every value (NaN where the analysis
+    left it undefined, e.g. a go phase that never ended), in the variable's unit."""
     from softcell.core.analysis import analyze
     from softcell.io.netcdf import open_dataset
 
@@ -200,7 +202,9 @@ def realization_means(
     point: dict[str, Any] = {}
     for key, each in values.items():
         v = np.array(each)
-        point[key] = float(v.mean())
-        point[f"{key}_sem"] = float(v.std(ddof=1) / math.sqrt(v.size))
+        v = v[np.isfinite(v)]
+        point[key] = float(v.mean()) if v.size else math.nan
+        point[f"{key}_sem"] = float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else math.nan
+        point[f"{key}_n"] = int(v.size)
         point[f"{key}_each"] = each
     return point

@@ -380,8 +380,8 @@ class DrivingProtocol(Component):
 
         ``phase``, ``data`` and ``coefficients`` as for :meth:`drive_kernel`; ``sense``:
         float64[9], what the bot senses, laid out by the indices of :class:`Sense`
-        (pose in cm and rad, force on the bot in N, torque in N cm, distance
-        to the membrane in cm, time and time in the phase in s). The phase ends at the first time the
+        (pose in cm and rad, force on the bot in N, torque in N cm, distance to the membrane
+        in cm, time and time in the phase in s). The phase ends at the first time the
         returned value is >= 0: at once if it is at the phase's start, else where it
         crosses zero, located by ``rodas4`` on its continuous extension to 1e-9 s and by
         ``explicit_euler`` to its step. The phases after it then start that much earlier

@@ -74,6 +74,9 @@ class Model:
         Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
     pair_terms : list of PairTerm
         The pair terms between the membranes of an assembly's cells (none for one cell).
+    event : callable or None
+        The protocol's compiled event kernel (:meth:`DrivingProtocol.event_kernel`; its value
+        in the unit the protocol chooses, >= 0 ends the phase), or None.
     """
 
     params: Parameters

@@ -83,9 +83,7 @@ def sampling_plan(params: Parameters) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return grid, index[: membrane.size], index[membrane.size :]
 
 
-def phase_at(
-    schedule: Schedule, times: np.ndarray, starts: np.ndarray | None = None
-) -> np.ndarray:
+def phase_at(schedule: Schedule, times: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
     """Phase code (int8) active at each time (s): the last phase started at or before it,
     by the schedule's start times or by ``starts`` (s), the start times as state events
     shifted them (non-decreasing: a phase an event ended at its start lasts 0 s)."""

@@ -34,11 +34,13 @@ BOUND = (
 def end_events(t, p, starts, phases, data, pose, drag, x, y, membrane, coefficients, log):
     """End phase p, and any following phase, while the event holds at time t (s): the later
     phases start that much earlier, each end is logged. ``drag`` (N, N cm) is minus the
-    energies' force and torque on the bot. Returns the phase index."""
+    energies' force and torque on the bot: (weighted membrane partials, the bot's own
+    energies). Returns the phase index."""
+    membrane_part, own = drag
     sense = np.empty(9)
     for c in range(3):
         sense[c] = pose[c]
-        sense[3 + c] = -drag[c]
+        sense[3 + c] = -(membrane_part[c] + own[c])
     best = np.inf
     if membrane:
         for i in range(x.size):
@@ -100,7 +102,6 @@ def segment(
     dpose = np.zeros(3)
     drive_out = np.zeros(3)
     bot_drag = np.zeros(3)
-    drag = np.zeros(3)
     weight = 2.0 * math.pi / n
     p = phase_index
     for _ in range(n_steps):
@@ -151,19 +152,24 @@ def segment(
         if HAS_BOT:
             bot_drag[:] = 0.0
             bot_forces(pose, context, coefficients, bot_drag)
-        if HAS_EVENT:
-            for j in range(3):
-                drag[j] = weight * dpose[j] + (bot_drag[j] if HAS_BOT else 0.0)
+        if HAS_EVENT:  # bot_drag stays 0 without energies of the bot alone
             p = end_events(
-                t, p, starts, phases, data, pose, drag, x, y, membrane, drive_coefficients, log
+                t,
+                p,
+                starts,
+                phases,
+                data,
+                pose,
+                (weight * dpose, bot_drag),
+                x,
+                y,
+                membrane,
+                drive_coefficients,
+                log,
             )
         drive(phases[p], data[p], pose, context, drive_coefficients, drive_out)
-        if HAS_BOT:
-            for j in range(3):
-                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j] - bot_drag[j])
-        else:
-            for j in range(3):
-                pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j])
+        for j in range(3):  # bot_drag is 0 without energies of the bot alone: x - 0.0 == x
+            pose[j] += dt * bot_mobility[j] * (drive_out[j] - weight * dpose[j] - bot_drag[j])
         if membrane:
             for j in range(modes.size):
                 modes[j] += dt * mobility * fhat[j]
