@@ -43,10 +43,21 @@ def alternating_schedule(
     """
     count = int(math.ceil(duration / shortest)) + 1
     lengths = rng.uniform(shortest, longest, count)
-    signs = rng.choice(np.array([-1.0, 1.0]), count)
+    return alternate(lengths, rng.choice(np.array([-1.0, 1.0]), count), duration)
+
+
+def alternate(lengths: np.ndarray, signs: np.ndarray, duration: float) -> Schedule:
+    """Run, tumble, run, ... of the given ``lengths`` (s), a tumble's datum its turn sign
+    from ``signs``, keeping the phases that start before ``duration`` (s).
+
+    Returns
+    -------
+    Schedule
+        Start times (s), phase codes and turn signs.
+    """
     start = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
     keep = start < duration
-    phase = np.where(np.arange(count) % 2 == 0, RUN, TUMBLE).astype(np.int8)
+    phase = np.where(np.arange(lengths.size) % 2 == 0, RUN, TUMBLE).astype(np.int8)
     data = np.where(phase == TUMBLE, signs, 0.0)
     return Schedule(start[keep], phase[keep], data[keep])
 

@@ -22,7 +22,7 @@ from softcell.core.params import ParameterSpec
 from softcell.core.schema import PHASE_RUN as RUN
 from softcell.core.schema import PHASE_TUMBLE as TUMBLE
 from softcell.errors import ParameterError
-from softcell.plugins.run_and_tumble import alternating_schedule, run_and_tumble_drive
+from softcell.plugins.run_and_tumble import alternate, alternating_schedule, run_and_tumble_drive
 
 #: The published digital twin of the robot (docs/model.md §5): the centre of rotation of a
 #: one-motor tumble lies this far (cm) from the bot's centre, turning counterclockwise and
@@ -75,12 +75,7 @@ def millisecond_schedule(rng: np.random.Generator, duration: float, lo: float, h
     first, last = round(1000 * lo), round(1000 * hi)
     count = int(math.ceil(duration / max(first, 1) * 1000)) + 1
     lengths = rng.integers(first, last + 1, count) / 1000.0
-    signs = rng.choice(np.array([-1.0, 1.0]), count)
-    start = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
-    keep = start < duration
-    phase = np.where(np.arange(count) % 2 == 0, RUN, TUMBLE).astype(np.int8)
-    data = np.where(phase == TUMBLE, signs, 0.0)
-    return Schedule(start[keep], phase[keep], data[keep])
+    return alternate(lengths, rng.choice(np.array([-1.0, 1.0]), count), duration)
 
 
 @njit(**JIT)

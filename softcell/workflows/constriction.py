@@ -227,13 +227,14 @@ def constriction(
         seed made.
     """
     from softcell.io.files import check_output
-    from softcell.workflows.study import run_points
+    from softcell.workflows.study import own_parameters, run_points
 
     design.check()
-    parameters = dict(parameters or {})
-    for key in ("radius", "duration", "obstacles", "sample_every", "sample_every_late"):
-        if key in parameters:
-            raise SoftcellError(f"parameter {key!r} is set by the constriction study itself")
+    parameters = own_parameters(
+        parameters,
+        "constriction",
+        ("radius", "duration", "obstacles", "sample_every", "sample_every_late"),
+    )
     out = check_output(Path(out), "report", directory=True)
     points = {
         _folder(out, r): (f"R = {r:g} cm, {len(design.gaps)} gaps", _config(design, r, parameters))

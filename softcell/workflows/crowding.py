@@ -192,13 +192,10 @@ def crowding(
         or a directory another study or seed made.
     """
     from softcell.io.files import check_output
-    from softcell.workflows.study import run_points
+    from softcell.workflows.study import own_parameters, run_points
 
     design.check()
-    parameters = dict(parameters or {})
-    for key in ("radius", "duration"):
-        if key in parameters:
-            raise SoftcellError(f"parameter {key!r} is set by the crowding study itself")
+    parameters = own_parameters(parameters, "crowding", ("radius", "duration"))
     out = check_output(Path(out), "report", directory=True)
     points = {
         _folder(out, radius, phi): (

@@ -154,13 +154,10 @@ def strategies(
     """
     from softcell.core.runconfig import RunConfig
     from softcell.io.files import check_output
-    from softcell.workflows.study import run_points
+    from softcell.workflows.study import own_parameters, run_points
 
     design.check()
-    parameters = dict(parameters or {})
-    for key in ("radius", "duration"):
-        if key in parameters:
-            raise SoftcellError(f"parameter {key!r} is set by the strategies study itself")
+    parameters = own_parameters(parameters, "strategies", ("radius", "duration"))
     out = check_output(Path(out), "report", directory=True)
     points = {
         _folder(out, strategy, radius): (

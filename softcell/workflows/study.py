@@ -84,6 +84,18 @@ def check_study_directory(out: Path, command: str, seed: int, overwrite: bool) -
         )
 
 
+def own_parameters(
+    parameters: dict[str, Any] | None, study: str, keys: tuple[str, ...]
+) -> dict[str, Any]:
+    """A copy of the model ``parameters`` a grid study was given, refused in one line if it
+    sets one of ``keys``, which the study ``study`` sets itself."""
+    parameters = dict(parameters or {})
+    for key in keys:
+        if key in parameters:
+            raise SoftcellError(f"parameter {key!r} is set by the {study} study itself")
+    return parameters
+
+
 def mark_study(out: Path, command: str, seed: int, overwrite: bool) -> None:
     """Check that ``out`` may hold the study ``command`` from ``seed``
     (:func:`check_study_directory`), create it, and mark it as that study's."""
