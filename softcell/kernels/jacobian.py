@@ -37,28 +37,60 @@ SPARSE_POINTS = 48
 
 
 @njit(**JIT)
-def _transform(buf, index, count, twiddle, lo, hi, scratch, cursor, out):
+def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
     """out[m - lo] = N^-1 sum_n buf[n] e^{-i m xi_n} for m = lo..hi; ``index[:count]`` lists
-    the points where ``buf`` may be nonzero (all of them when count == N). ``cursor``
-    (int64[>= count]) is scratch for the twiddle indices (m i) mod N, stepped without a
-    division per term."""
+    the points where ``buf`` may be nonzero (all of them when count == N, a power of two).
+    The twiddle index (m i) mod N is stepped without a division per term."""
     n = buf.size
     if count <= SPARSE_POINTS:
+        # Point by point, each adding its term to every m: the sum of each m still runs over
+        # the points in order.
         inv = 1.0 / n
+        mask = n - 1  # N is a power of two: (m i) mod N without a division or a branch
+        for m in range(hi - lo + 1):
+            out[m] = 0.0 + 0.0j
         for t in range(count):
-            cursor[t] = (lo * index[t]) % n
-        for m in range(lo, hi + 1):
-            s = 0.0 + 0.0j
-            for t in range(count):
-                i = index[t]
-                s += buf[i] * twiddle[cursor[t]]
-                c = cursor[t] + i
-                cursor[t] = c - n if c >= n else c
-            out[m - lo] = s * inv
+            i = index[t]
+            value = buf[i]
+            c = (lo * i) & mask
+            for m in range(hi - lo + 1):
+                out[m] += value * twiddle[c]
+                c = (c + i) & mask
+        for m in range(hi - lo + 1):
+            out[m] = out[m] * inv
     else:
         c2c(buf, scratch, AXES, True, 1.0 / n, 1)
         for m in range(lo, hi + 1):
             out[m - lo] = scratch[m % n]
+
+
+@njit(**JIT)
+def _transform_pair(buf_a, buf_b, index, count, twiddle, lo, hi, scratch, out_a, out_b):
+    """:func:`_transform` of two buffers nonzero at the same points; the direct sums share
+    their twiddle factors (each sum still runs over the points in order)."""
+    n = buf_a.size
+    if count > SPARSE_POINTS:
+        _transform(buf_a, index, count, twiddle, lo, hi, scratch, out_a)
+        _transform(buf_b, index, count, twiddle, lo, hi, scratch, out_b)
+        return
+    inv = 1.0 / n
+    mask = n - 1
+    for m in range(hi - lo + 1):
+        out_a[m] = 0.0 + 0.0j
+        out_b[m] = 0.0 + 0.0j
+    for t in range(count):
+        i = index[t]
+        value_a = buf_a[i]
+        value_b = buf_b[i]
+        c = (lo * i) & mask
+        for m in range(hi - lo + 1):
+            w = twiddle[c]
+            out_a[m] += value_a * w
+            out_b[m] += value_b * w
+            c = (c + i) & mask
+    for m in range(hi - lo + 1):
+        out_a[m] = out_a[m] * inv
+        out_b[m] = out_b[m] * inv
 
 
 @njit(**JIT)
@@ -141,30 +173,58 @@ def _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b):
     """Add block (alpha, beta) (and, for alpha != beta, its transpose) to cal_A, cal_B:
     cal_A_ij += c_al(k_i) (i k_j)^be A_hat(k_i - k_j), cal_B_ij += c_al(k_i) conj((i k_j)^be)
     B_hat(k_i + k_j), with each factor c (i k)^o a real number times a fixed power of i, so
-    the powers of i turn the transforms once per block and the entries cost real products."""
+    the powers of i turn the transforms once per block and the entries cost real products
+    (``rotated``: float64[8, 4 Lc + 1], the turned transforms' real and imaginary parts)."""
     size = a_hat.size
     ea, eb = FORCE_TURNS[al], FORCE_TURNS[be]
     fa, fb = ORDER_TURNS[al], ORDER_TURNS[be]
     for q in range(size):
-        rotated[0, q] = _turn(a_hat[q], ea + fb)
-        rotated[1, q] = _turn(b_hat[q], ea - fb)
-        rotated[2, q] = _turn(a_hat[size - 1 - q].conjugate(), eb + fa)
-        rotated[3, q] = _turn(b_hat[q], eb - fa)
+        _split(_turn(a_hat[q], ea + fb), rotated, 0, q)
+        _split(_turn(b_hat[q], ea - fb), rotated, 2, q)
+        _split(_turn(a_hat[size - 1 - q].conjugate(), eb + fa), rotated, 4, q)
+        _split(_turn(b_hat[q], eb - fa), rotated, 6, q)
     m_count = cal_a.shape[0]
     for i in range(m_count):
         ra = magnitudes[al, i]
         rb = magnitudes[be, i]
-        for j in range(m_count):
-            wa = ra * magnitudes[be, j]
-            q = i - j + 2 * lc
-            va = wa * rotated[0, q]
-            vb = wa * rotated[1, i + j]
-            if be != al:
+        if be == al:
+            for j in range(m_count):
+                wa = ra * magnitudes[be, j]
+                q = i - j + 2 * lc
+                cal_a[i, j] += complex(wa * rotated[0, q], wa * rotated[1, q])
+                cal_b[i, j] += complex(wa * rotated[2, i + j], wa * rotated[3, i + j])
+        else:
+            for j in range(m_count):
+                wa = ra * magnitudes[be, j]
                 wb = rb * magnitudes[al, j]
-                va += wb * rotated[2, q]
-                vb += wb * rotated[3, i + j]
-            cal_a[i, j] += va
-            cal_b[i, j] += vb
+                q = i - j + 2 * lc
+                cal_a[i, j] += complex(
+                    wa * rotated[0, q] + wb * rotated[4, q],
+                    wa * rotated[1, q] + wb * rotated[5, q],
+                )
+                cal_b[i, j] += complex(
+                    wa * rotated[2, i + j] + wb * rotated[6, i + j],
+                    wa * rotated[3, i + j] + wb * rotated[7, i + j],
+                )
+
+
+@njit(**JIT)
+def _split(z, out, row, q):
+    """out[row, q], out[row + 1, q] = the real and imaginary parts of z."""
+    out[row, q] = z.real
+    out[row + 1, q] = z.imag
+
+
+@njit(**JIT)
+def spectral_factors(lc, factors, orders, magnitudes):
+    """The tables :func:`assemble_jacobian` reads, for k = -Lc..Lc (column k + Lc):
+    ``factors[o]`` = c_o(k) (-1, i k, k^2), ``orders[o]`` = (i k)^o (1, i k, -k^2) and
+    ``magnitudes[o]`` = k^o, for o = 0, 1, 2."""
+    for o in range(3):
+        for i in range(2 * lc + 1):
+            factors[o, i] = _force_factor(o, i - lc)
+            orders[o, i] = _order_factor(o, i - lc)
+            magnitudes[o, i] = float(i - lc) ** o
 
 
 # A compiled inner loop: exempt from the complexity limit of the rest of the code.
@@ -183,7 +243,6 @@ def assemble_jacobian(  # noqa: C901
     buf_a,
     buf_b,
     scratch,
-    cursor,
     a_hat,
     b_hat,
     g_hat,
@@ -201,20 +260,14 @@ def assemble_jacobian(  # noqa: C901
     ``active[:n_active]`` lists the points where they may be nonzero (see
     :func:`active_points`).
 
-    ``twiddle``: complex128[N], e^{-2 pi i n / N}. The rest are scratch arrays: ``index``
-    int64[N];
-    ``buf_a, buf_b, scratch`` complex128[N]; ``a_hat, b_hat`` complex128[4 Lc + 1]; ``g_hat``
-    complex128[2 Lc + 1]; ``cal_a, cal_b`` complex128[2 Lc + 1, 2 Lc + 1]; ``factors, orders``
-    complex128[3, 2 Lc + 1]; ``magnitudes`` float64[3, 2 Lc + 1] (k^order); ``rotated``
-    complex128[4, 4 Lc + 1].
+    ``twiddle``: complex128[N], e^{-2 pi i n / N}; ``factors, orders`` (complex128[3, 2 Lc + 1])
+    and ``magnitudes`` (float64[3, 2 Lc + 1]): the tables of :func:`spectral_factors`. The
+    rest are scratch arrays: ``index`` int64[N]; ``buf_a, buf_b, scratch`` complex128[N];
+    ``a_hat, b_hat`` complex128[4 Lc + 1]; ``g_hat`` complex128[2 Lc + 1]; ``cal_a, cal_b``
+    complex128[2 Lc + 1, 2 Lc + 1]; ``rotated`` float64[8, 4 Lc + 1].
     """
     n = hww.shape[0]
     m_count = 2 * lc + 1
-    for o in range(3):
-        for i in range(m_count):
-            factors[o, i] = _force_factor(o, i - lc)
-            orders[o, i] = _order_factor(o, i - lc)
-            magnitudes[o, i] = float(i - lc) ** o
     base = 2 * m_count
     weight = 2.0 * math.pi / n
     cal_a[:, :] = 0.0
@@ -246,8 +299,9 @@ def assemble_jacobian(  # noqa: C901
                 hyy = hww[i, 2 * al + 1, 2 * be + 1]
                 buf_a[i] = complex(0.5 * (hxx + hyy), 0.5 * (hyx - hxy))
                 buf_b[i] = complex(0.5 * (hxx - hyy), 0.5 * (hyx + hxy))
-            _transform(buf_a, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, a_hat)
-            _transform(buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, cursor, b_hat)
+            _transform_pair(
+                buf_a, buf_b, index, count, twiddle, -2 * lc, 2 * lc, scratch, a_hat, b_hat
+            )
             _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b)
     for i in range(m_count):
         for j in range(m_count):
@@ -271,7 +325,7 @@ def assemble_jacobian(  # noqa: C901
             for t in range(count):
                 i = index[t]
                 buf_a[i] = complex(hwp[i, 2 * al, c], hwp[i, 2 * al + 1, c])
-            _transform(buf_a, index, count, twiddle, -lc, lc, scratch, cursor, g_hat)
+            _transform(buf_a, index, count, twiddle, -lc, lc, scratch, g_hat)
             for i in range(m_count):
                 v = factors[al, i] * g_hat[i]
                 jac[i, base + c] += mobility * v.real

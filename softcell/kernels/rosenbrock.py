@@ -65,7 +65,8 @@ def stages(f, args, u, f0, h, a, c, mat, pivots, k, y, force):
     nu = u.size
     for s in range(c.shape[0]):
         if s == 0:
-            force[:] = f0
+            for i in range(nu):
+                force[i] = f0[i]
         else:
             if s < a.shape[0]:
                 for i in range(nu):
@@ -83,7 +84,8 @@ def stages(f, args, u, f0, h, a, c, mat, pivots, k, y, force):
                     acc += c[s, j] * k[j, i]
                 force[i] += acc / h
         lu_solve(mat, pivots, force)
-        k[s, :] = force
+        for i in range(nu):
+            k[s, i] = force[i]
 
 
 @njit(**JIT_COMPOSED)

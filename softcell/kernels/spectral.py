@@ -27,9 +27,17 @@ def wavenumber(j: int, n: int) -> int:
 def derivative_spectrum(modes, order, spec):
     """Fill ``spec`` (complex128[N]) with the N-point spectrum of the ``order``-th xi-derivative
     of the curve (0, 1 or 2): (i k)^order g_k in FFT bin k mod N, zero elsewhere."""
+    spec[:] = 0.0
+    derivative_bins(modes, order, spec)
+
+
+@njit(**JIT)
+def derivative_bins(modes, order, spec):
+    """:func:`derivative_spectrum` without clearing ``spec``: writes only the 2 Lc + 1 bins
+    of the modes, so every other bin of ``spec`` must be zero already (a buffer that holds
+    nothing else)."""
     n = spec.size
     lc = (modes.size - 1) // 2
-    spec[:] = 0.0
     for j in range(modes.size):
         k = j - lc
         factor = 1.0 + 0.0j

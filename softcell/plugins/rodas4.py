@@ -36,6 +36,7 @@ from softcell.core.engine.compose import compose_bot, compose_pair_laws, templat
 from softcell.core.engine.state import event_state
 from softcell.core.params import ParameterSpec
 from softcell.errors import ParameterError
+from softcell.kernels.jacobian import spectral_factors
 from softcell.kernels.linalg import lu_workspace
 from softcell.plugins.rodas4_method import (  # shared with the template rodas4_loop.py
     ERR_ACCEPTED,
@@ -81,7 +82,6 @@ Grid = namedtuple(
         "buf_a",
         "buf_b",
         "scratch",
-        "cursor",
     ],
 )
 
@@ -125,7 +125,9 @@ Workspace = namedtuple(
 
 
 def grid(n: int, m: int) -> Grid:
-    """Scratch arrays of one collocation grid of n points (m = 2 Lc + 1 modes)."""
+    """Scratch arrays of one collocation grid of n points (m = 2 Lc + 1 modes). ``spec``
+    holds the curve's spectrum only: just the modes' bins are ever written, the others stay
+    zero."""
     c = np.complex128
     return Grid(
         spec=np.zeros(n, c),
@@ -148,7 +150,6 @@ def grid(n: int, m: int) -> Grid:
         buf_a=np.zeros(n, c),
         buf_b=np.zeros(n, c),
         scratch=np.zeros(n, c),
-        cursor=np.zeros(n, np.int64),
     )
 
 
@@ -159,6 +160,8 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
     nu = 2 * m + 3
     scale = model.params.membrane_length / (2 * math.pi)
     c = np.complex128
+    factors, orders, magnitudes = np.zeros((3, m), c), np.zeros((3, m), c), np.zeros((3, m))
+    spectral_factors(lc, factors, orders, magnitudes)
     return Workspace(
         modes=np.zeros(m, c),
         smooth=grid(smooth_nodes, m),
@@ -176,10 +179,10 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         g_hat=np.zeros(m, c),
         cal_a=np.zeros((m, m), c),
         cal_b=np.zeros((m, m), c),
-        factors=np.zeros((3, m), c),
-        orders=np.zeros((3, m), c),
-        magnitudes=np.zeros((3, m)),
-        rotated=np.zeros((4, 4 * lc + 1), c),
+        factors=factors,
+        orders=orders,
+        magnitudes=magnitudes,
+        rotated=np.zeros((8, 4 * lc + 1)),
         jac=np.zeros((nu, nu)),
         mat=np.zeros((nu, nu)),
         pivots=lu_workspace(nu),

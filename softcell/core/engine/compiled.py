@@ -39,7 +39,10 @@ from softcell.config import JIT, module_store
 from softcell.errors import CacheWarning, ContractError, SoftcellError
 
 # numba flags of the generated functions: the kernels' own, cached on disk, or not cached
-# where an entry cannot be keyed (see :class:`NotCacheable`).
+# where an entry cannot be keyed (see :class:`NotCacheable`). The loader binds them as
+# ``JIT_FLAGS``, and as ``LEAN_JIT_FLAGS`` without numba's reference counting (``_nrt``) for
+# functions that never allocate: counting the references of the workspaces' arrays at every
+# call cost a sixth of a rodas4 step.
 _CACHED = {**JIT, "cache": True}
 _UNCACHED = {**JIT, "cache": False}
 
@@ -214,6 +217,7 @@ def _execute(
     module.__file__ = filename
     module.__dict__.update(bindings)
     module.__dict__["JIT_FLAGS"] = dict(flags)
+    module.__dict__["LEAN_JIT_FLAGS"] = {**flags, "_nrt": False}
     # The stored file holds the source line for line (its origin and checksum follow it), so
     # tracebacks name the template's own line numbers.
     code = compile(source, filename, "exec")
@@ -283,7 +287,10 @@ def compile_module(
         starts with it.
     source : str
         Python source. Its compiled functions are declared ``@njit(**JIT_FLAGS)``; the
-        loader binds ``JIT_FLAGS`` (softcell's kernel flags, cached on disk).
+        loader binds ``JIT_FLAGS`` (softcell's kernel flags, cached on disk) and
+        ``LEAN_JIT_FLAGS`` (the same without numba's reference counting, faster for a
+        function that takes many arrays; such a function must not allocate one, nor
+        inline a function that does).
     bindings : mapping of str to compiled function or scalar
         Global names the source uses: components' kernels, functions of other generated
         modules, constants (bool, int, float, str).

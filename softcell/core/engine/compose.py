@@ -67,7 +67,7 @@ def compose_partials(kernels: Sequence[Callable[..., None]]) -> Callable[..., No
     calls = [_term_call(f"k{i}", PARTIALS_ARGS, i) for i in range(len(kernels))] or ["    pass"]
     source = (
         _PREAMBLE
-        + f"@njit(**JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
+        + f"@njit(**LEAN_JIT_FLAGS)\ndef total_partials({PARTIALS_ARGS}):\n"
         + "\n".join(calls)
         + "\n"
     )
@@ -98,7 +98,7 @@ def compose_hessians(terms) -> Callable[..., None]:
     (x, y, x', y', x'', y''); the other arguments are those of the fallback.
     """
     bindings: dict[str, object] = {}
-    lines = [f"@njit(**JIT_FLAGS)\ndef total_hessian({HESSIAN_ARGS}):"]
+    lines = [f"@njit(**LEAN_JIT_FLAGS)\ndef total_hessian({HESSIAN_ARGS}):"]
     names = []
     for i, term in enumerate(terms):
         kernel = term.hessian_kernel()
@@ -145,8 +145,8 @@ def compose_bot(terms) -> tuple[Callable[..., None], Callable[..., None]]:
     differences of its ``bot_kernel`` with the steps ``steps[6:9]``). ``coefficients`` is the
     tuple of the terms' arrays; terms without a bot kernel are skipped."""
     bindings: dict[str, object] = {}
-    forces = [f"@njit(**JIT_FLAGS)\ndef bot_forces({BOT_ARGS}):"]
-    hessians = [f"@njit(**JIT_FLAGS)\ndef bot_hessians({BOT_HESSIAN_ARGS}):"]
+    forces = [f"@njit(**LEAN_JIT_FLAGS)\ndef bot_forces({BOT_ARGS}):"]
+    hessians = [f"@njit(**LEAN_JIT_FLAGS)\ndef bot_hessians({BOT_HESSIAN_ARGS}):"]
     names = []
     for i, term in enumerate(terms):
         kernel = term.bot_kernel()
@@ -182,7 +182,7 @@ def compose_pair_laws(terms) -> Callable[..., None]:
     (cm) into ``out[0:3]``; ``coefficients`` is the tuple of the terms' arrays, ``scratch``
     float64[3]."""
     bindings: dict[str, object] = {}
-    lines = ["@njit(**JIT_FLAGS)\ndef pair_law(rho, coefficients, out, scratch):"]
+    lines = ["@njit(**LEAN_JIT_FLAGS)\ndef pair_law(rho, coefficients, out, scratch):"]
     lines.append("    out[0] = 0.0\n    out[1] = 0.0\n    out[2] = 0.0")
     for i, term in enumerate(terms):
         bindings[f"p{i}"] = term.law_kernel()

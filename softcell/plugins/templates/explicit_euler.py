@@ -5,7 +5,8 @@ Bound: ``partials`` (the composed energy terms), ``drive`` (the protocol's kerne
 (whether the friction law is nonlinear; then ``friction_velocity`` is its compiled velocity,
 from ``core/engine/templates/friction_modes.py``, and ``mobility`` is 1), ``HAS_BOT`` (whether
 some term has an energy of the bot alone; then ``bot_forces`` is their sum), ``event`` and
-``HAS_EVENT`` (the protocol's event kernel, and whether it has one) and ``JIT_FLAGS``.
+``HAS_EVENT`` (the protocol's event kernel, and whether it has one) and ``JIT_FLAGS`` (its
+functions allocate their scratch arrays, so they keep numba's reference counting).
 """
 # ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
@@ -16,7 +17,7 @@ from numba import njit
 
 from softcell.kernels.spectral import assemble, evaluate
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: The names this template expects the loader to bind (besides the flags); a missing
 #: or an extra binding is an error naming the template.
 BOUND = (
     "partials",

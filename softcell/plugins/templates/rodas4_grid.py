@@ -2,19 +2,19 @@
 compiled per group by :func:`softcell.plugins.rodas4.compiled_loop`.
 
 Bound: ``partials`` and ``hessian`` (the group's composed kernels), ``SCAN`` (bool) and
-``JIT_FLAGS``. With ``SCAN`` False, second derivatives are taken to vanish where all partials
+``LEAN_JIT_FLAGS``. With ``SCAN`` False, second derivatives are taken to vanish where all partials
 do (true of the contact, which vanishes beyond its cut-off) and only those points are visited;
 otherwise (the fallback's differences, or a small grid) every point is scanned.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
 
 from numba import njit
 from rocket_fft import c2c
 
 from softcell.kernels.jacobian import SPARSE_POINTS, active_points, assemble_jacobian
-from softcell.kernels.spectral import AXES, assemble, derivative_spectrum
+from softcell.kernels.spectral import AXES, assemble, derivative_bins
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.
 BOUND = (
     "partials",
@@ -23,7 +23,7 @@ BOUND = (
 )
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def forces(modes, pose, order, context, coefficients, g):
     """g.fhat (N) and g.dpose of the group at these modes; curve derivatives above
     ``order`` are left at zero, and so are the partials with respect to them (the energy
@@ -32,7 +32,7 @@ def forces(modes, pose, order, context, coefficients, g):
     n = g.w.shape[1]
     lc = (modes.size - 1) // 2
     for o in range(order + 1):
-        derivative_spectrum(modes, o, g.spec)
+        derivative_bins(modes, o, g.spec)  # g.spec holds nothing else
         c2c(g.spec, g.curve[o], AXES, False, 1.0, 1)
         for i in range(n):
             g.w[2 * o, i] = g.curve[o, i].real
@@ -59,6 +59,24 @@ def forces(modes, pose, order, context, coefficients, g):
         p[5],
         g.dpose,
     )
+    count, first, second = _scan(p, order, g)
+    if first or second or count > SPARSE_POINTS:
+        # FFTs, skipping the orders whose partials vanish everywhere (those above ``order``
+        # always do, and their rows of q are not read).
+        for o in range(order + 1):
+            for i in range(n):
+                g.q[o, i] = complex(p[2 * o, i], p[2 * o + 1, i])
+        assemble(g.q[0], g.q[1], g.q[2], count > 0, first, second, g.scratch, g.fhat)
+    else:
+        _direct_modes(p, count, lc, g)
+
+
+@njit(**LEAN_JIT_FLAGS)
+def _scan(p, order, g):
+    """List in g.index the points where the zeroth-order partials are nonzero and in
+    g.active those where any is (their count in g.n_active); return the first count and
+    whether any first- and second-order partial is nonzero."""
+    n = p.shape[1]
     count = 0
     n_active = 0
     first = False
@@ -79,30 +97,33 @@ def forces(modes, pose, order, context, coefficients, g):
             g.active[n_active] = i
             n_active += 1
     g.n_active[0] = n_active
-    if first or second or count > SPARSE_POINTS:
-        # FFTs, skipping the orders whose partials vanish everywhere.
-        for i in range(n):
-            for o in range(3):
-                g.q[o, i] = complex(p[2 * o, i], p[2 * o + 1, i])
-        assemble(g.q[0], g.q[1], g.q[2], count > 0, first, second, g.spec, g.fhat)
-    else:
-        # Only a few points carry a force (the contact): direct sums, no FFT.
-        # The twiddle index (k i) mod N of each point is stepped by i from k to k + 1.
-        inv = 1.0 / n
-        for t in range(count):
-            i = g.index[t]
-            g.cursor[t] = (-lc * i) % n
-            g.scratch[t] = complex(p[0, i], p[1, i])
-        for j in range(modes.size):
-            acc = 0.0 + 0.0j
-            for t in range(count):
-                acc += g.scratch[t] * g.twiddle[g.cursor[t]]
-                c = g.cursor[t] + g.index[t]
-                g.cursor[t] = c - n if c >= n else c
-            g.fhat[j] = -acc * inv
+    return count, first, second
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
+def _direct_modes(p, count, lc, g):
+    """g.fhat from the zeroth-order partials at the ``count`` points of g.index (only a few
+    carry a force, the contact): direct sums, no FFT, point by point (the sum of each mode
+    still runs over the points in order). The twiddle index (k i) mod N of a point is
+    stepped by i from k to k + 1 (N a power of two)."""
+    n = p.shape[1]
+    inv = 1.0 / n
+    mask = n - 1
+    m = g.fhat.size
+    for j in range(m):
+        g.fhat[j] = 0.0 + 0.0j
+    for t in range(count):
+        i = g.index[t]
+        value = complex(p[0, i], p[1, i])
+        c = (-lc * i) & mask
+        for j in range(m):
+            g.fhat[j] += value * g.twiddle[c]
+            c = (c + i) & mask
+    for j in range(m):
+        g.fhat[j] = -g.fhat[j] * inv
+
+
+@njit(**LEAN_JIT_FLAGS)
 def grid_jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
     """Add the group's part of the Jacobian into ws.jac; g.w must hold the curve and
     g.active the points where the last :func:`forces` at this state found partials."""
@@ -140,7 +161,6 @@ def grid_jacobian(pose, context, coefficients, mobility, bot_mobility, g, ws):
         g.buf_a,
         g.buf_b,
         g.scratch,
-        g.cursor,
         ws.a_hat,
         ws.b_hat,
         ws.g_hat,

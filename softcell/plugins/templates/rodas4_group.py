@@ -6,7 +6,8 @@ landing on every member's switches. Compiled per component set by
 
 Bound: ``rhs`` and ``jacobian`` (the single-cell loop's, from ``rodas4_loop.py``),
 ``pair_law`` (the pair terms' laws summed, :func:`softcell.core.engine.compose.compose_pair_laws`)
-and ``JIT_FLAGS``. Only the viscous friction law: the pair forces move the modes by the
+and ``JIT_FLAGS`` (the pair kernels inlined here allocate their scratch arrays, so numba
+counts references). Only the viscous friction law: the pair forces move the modes by the
 membrane's mobility.
 """
 # ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
@@ -45,7 +46,7 @@ from softcell.plugins.rodas4_method import (
     T,
 )
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``).
+#: The names this template expects the loader to bind (besides the flags).
 BOUND = ("rhs", "jacobian", "pair_law")
 
 #: Status: more contacts than the contact table holds.
@@ -95,7 +96,9 @@ def group_jacobian(u, phases, data, problem, ws, pair, jac, scratch):
         uc = u[c * nu : (c + 1) * nu]
         rhs(uc, phases[c], data[c], scratch, problem, ws)
         jacobian(uc, phases[c], data[c], problem, ws)
-        jac[c * nu : (c + 1) * nu, c * nu : (c + 1) * nu] = ws.jac
+        for i in range(nu):
+            for j in range(nu):
+                jac[c * nu + i, c * nu + j] = ws.jac[i, j]
     _points(u, pair)
     count = find_contacts(pair.z, pair.shifts, pair.constants[0], pair.contacts)
     if count < 0:
@@ -195,7 +198,8 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
                 clock[ERR_ACCEPTED] = max(1e-2, err)
                 clock[REJECTED_LAST] = 0.0
                 dense_output(u, gw.ynew, gw.k, hd, dense)
-                u[:] = gw.ynew
+                for i in range(u.size):
+                    u[i] = gw.ynew[i]
                 clock[T_LAST] = t
                 clock[H_LAST] = h
                 if land:
@@ -214,7 +218,8 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
             clock[REJECTED_LAST] = 1.0
             counters[REJECTED] += 1
     if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
-        sample[:] = u
+        for i in range(u.size):
+            sample[i] = u[i]
     else:
         dense_value(dense, (t_end - clock[T_LAST]) / clock[H_LAST], sample)
     return OK

@@ -11,9 +11,9 @@ and whether it has one), ``LAW`` (whether the friction law is nonlinear; then
 ``friction_velocity`` and ``friction_jacobian`` are its compiled functions, from
 ``core/engine/templates/friction_modes.py``), ``HAS_BOT_S``, ``HAS_BOT_F`` (whether a group has
 energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
-their sums, from :func:`softcell.core.engine.compose.compose_bot`) and ``JIT_FLAGS``.
+their sums, from :func:`softcell.core.engine.compose.compose_bot`) and ``LEAN_JIT_FLAGS``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
 
 import math
 
@@ -49,7 +49,7 @@ from softcell.plugins.rodas4_method import (
     accumulate,
 )
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.
 BOUND = (
     "forces_s",
@@ -76,7 +76,7 @@ BOUND = (
 )
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def rhs(u, phase, datum, out, problem, ws):
     """du/dt at u (phase fixed); leaves the curves at u in the grids' ``w``. ``problem`` is
     a :class:`~softcell.plugins.rodas4_method.Problem` (``coefficients``: the smooth group's
@@ -117,7 +117,7 @@ def rhs(u, phase, datum, out, problem, ws):
         out[2 * m + c] = bot_mobility[c] * (ws.drv[c] - drag[c])
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def jacobian(u, phase, datum, problem, ws):
     """The Jacobian at u into ``ws.jac``; the grids' ``w`` (and, with a nonlinear friction
     law, ``ws.law``) must hold what :func:`rhs` left there at u."""
@@ -163,14 +163,14 @@ def jacobian(u, phase, datum, problem, ws):
                 ws.jac[2 * m + c, 2 * m + d] -= bot_mobility[c] * hpp[c, d]
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def stage_rhs(y, out, args):
     """The right-hand side in the form of :func:`softcell.kernels.rosenbrock.stages`."""
     phase, datum, problem, ws = args
     rhs(y, phase, datum, out, problem, ws)
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def membrane_distance(u, m, x, y):
     """The distance (cm) from (x, y) to the membrane's curve of modes u[:m] + i u[m:2m]
     (g_k, k = -Lc..Lc), sampled at 8 m points: each point by Horner's rule in e^{i xi}."""
@@ -188,7 +188,7 @@ def membrane_distance(u, m, x, y):
     return best
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def event_at(u, t, t_phase, phase, datum, problem, ws, scratch):
     """The event kernel's value at the state u at time t (s), in a phase begun at t_phase
     (s): evaluates the right-hand side into ``scratch`` for the force on the bot."""
@@ -204,7 +204,7 @@ def event_at(u, t, t_phase, phase, datum, problem, ws, scratch):
     return event(phase, datum, sense, problem[2])
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def locate(dense, t0, h, phase, datum, t_phase, problem, ws):
     """The fraction of the last step [t0, t0 + h] (s) at which the event first reaches 0,
     by the Illinois method on the continuous extension, to 1e-9 s; the state there is left
@@ -239,7 +239,7 @@ def locate(dense, t0, h, phase, datum, t_phase, problem, ws):
     return hi
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def end_phase(starts, p, t, log):
     """Phase p ends at t (s): the later phases start that much earlier; t is logged."""
     if p + 1 < starts.size:
@@ -252,7 +252,7 @@ def end_phase(starts, p, t, log):
         log.count[0] = n + 1
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, log):  # noqa: C901
     """Step until the clock reaches ``t_end`` (s), then write the state there into
     ``sample``; returns a status code. ``state``, ``schedule``, ``problem``, ``control``,
@@ -329,7 +329,8 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
                 clock[ERR_ACCEPTED] = max(1e-2, err)
                 clock[REJECTED_LAST] = 0.0
                 dense_output(u, ynew, k, hd, dense)
-                u[:] = ynew
+                for i in range(u.size):
+                    u[i] = ynew[i]
                 clock[T_LAST] = t
                 clock[H_LAST] = h
                 t_new = t_switch if land else t + h
@@ -341,7 +342,8 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
                     # The event crossed zero during this step: go on from where it did.
                     frac = locate(dense, t, h, phase, datum, starts[p], problem, ws)
                     t_new = t + frac * h
-                    u[:] = ws.y
+                    for i in range(u.size):
+                        u[i] = ws.y[i]
                     end_phase(starts, p, t_new, log)
                     p += 1
                 elif land:
@@ -356,13 +358,14 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
             counters[REJECTED] += 1
     phase_index[0] = p
     if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
-        sample[:] = u
+        for i in range(u.size):
+            sample[i] = u[i]
     else:
         dense_value(dense, (t_end - clock[T_LAST]) / clock[H_LAST], sample)
     return OK
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def integrate(state, targets, samples, schedule, problem, control, tableau, ws, log):
     """For each time of ``targets`` (increasing, s): step until the clock reaches it, then
     write the state there into the matching row of ``samples`` from the last step's

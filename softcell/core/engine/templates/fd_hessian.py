@@ -1,23 +1,23 @@
 """The documented fallback for an energy term without analytic second derivatives: central
 differences of its partials kernel (see :func:`softcell.core.engine.model.compose_hessians`).
 
-Bound: ``partials`` (the term's partials kernel), ``JIT_FLAGS``.
+Bound: ``partials`` (the term's partials kernel), ``LEAN_JIT_FLAGS``.
 
 A term's partials at point n depend only on the point's own w_n and on the pose, so one
 perturbation of component b at *all* points gives column b of every point's Hessian:
 2 x (6 + 3) kernel calls in all. Steps: ``steps[0:6]`` for w (cm), ``steps[6:9]`` for the
 pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
 
 from numba import njit
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.
 BOUND = ("partials",)
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def fd_hessian(
     w,
     pose,
@@ -37,7 +37,8 @@ def fd_hessian(
     n = w.shape[1]
     for b in range(6):
         h = steps[b]
-        saved[:] = w[b]
+        for i in range(n):
+            saved[i] = w[b, i]
         for i in range(n):
             w[b, i] = saved[i] + h
         plus[:, :] = 0.0
@@ -82,14 +83,16 @@ def fd_hessian(
             minus[5],
             dminus,
         )
-        w[b] = saved
+        for i in range(n):
+            w[b, i] = saved[i]
         inv = 0.5 / h
         for a in range(6):
             for i in range(n):
                 hww[i, a, b] += (plus[a, i] - minus[a, i]) * inv
     for c in range(3):
         h = steps[6 + c]
-        pose_tmp[:] = pose
+        for d in range(3):
+            pose_tmp[d] = pose[d]
         pose_tmp[c] = pose[c] + h
         plus[:, :] = 0.0
         dplus[:] = 0.0

@@ -3,9 +3,10 @@ per law by :func:`softcell.core.engine.nonlinear_friction.compiled_friction`.
 
 Bound: ``law_velocity`` (the law's velocity kernel), ``ANALYTIC`` (whether ``law_derivative``,
 the law's derivative kernel, is bound; otherwise central differences of ``law_velocity``) and
-``JIT_FLAGS``. ``lw`` is the workspace of :func:`softcell.core.engine.nonlinear_friction.workspace`.
+``LEAN_JIT_FLAGS``. ``lw`` is the workspace of
+:func:`softcell.core.engine.nonlinear_friction.workspace`.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
+# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
 
 from numba import njit
 
@@ -17,7 +18,7 @@ from softcell.kernels.friction_modes import (
     velocity_modes,
 )
 
-#: The names this template expects the loader to bind (besides ``JIT_FLAGS``); a missing
+#: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.
 BOUND = (
     "law_velocity",
@@ -26,7 +27,7 @@ BOUND = (
 )
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def velocity(modes, fhat, vhat, lw):
     """vhat (cm s^-1): the velocity modes |k| <= Lc of the membrane with modes ``modes`` (cm)
     under the force modes ``fhat`` (N per unit xi); leaves the membrane's points and
@@ -38,7 +39,7 @@ def velocity(modes, fhat, vhat, lw):
     velocity_modes(lw.vx, lw.vy, lw.spec, lw.field, vhat)
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def derivative(lw):
     """d v / d f at the force density in ``lw.fx, lw.fy`` (the membrane held where
     :func:`velocity` left it) into ``lw.dxx ... lw.dyy``."""
@@ -76,7 +77,7 @@ def derivative(lw):
                 lw.dyy[i] = (lw.vy_plus[i] - lw.vy[i]) * inv
 
 
-@njit(**JIT_FLAGS)
+@njit(**LEAN_JIT_FLAGS)
 def jacobian(jac, lw):
     """The force modes' rows of ``jac`` (d f_hat / d u, at the state whose force density
     :func:`velocity` left in ``lw``) become the velocity modes' rows."""
