@@ -129,3 +129,32 @@ def test_pivot_drive_turns_the_free_bot_about_its_pivot():
         pivot_x[turning + 1] - pivot_x[turning], pivot_y[turning + 1] - pivot_y[turning]
     )
     assert jumps.max() < 1e-3
+
+
+@settings(max_examples=100)
+@given(
+    st.floats(1.0, 4.0),
+    st.floats(0.3, 1.0),
+    st.lists(
+        st.tuples(st.floats(-6, 6), st.floats(-6, 6))
+        | st.tuples(st.floats(-6, 6), near_axis)
+        | st.tuples(near_axis, st.floats(-6, 6)),
+        min_size=0,
+        max_size=23,
+    ),
+)
+def test_distances_four_roots_at_a_time_are_the_same_numbers(a, ratio, points):
+    # The contact finds the roots of four points at a time, interleaved: each point's
+    # Newton iterates must be its own, to the last bit (runs keep their bytes).
+    from softcell.kernels.ellipse import signed_distance_local, signed_distances_local
+
+    b = a * ratio
+    px = np.array([p[0] for p in points] + [0.0])
+    py = np.array([p[1] for p in points] + [0.0])
+    count = len(points) + 1  # with the centre, the one point of no root and two normals
+    rho, nx, ny = np.empty(count), np.empty(count), np.empty(count)
+    signed_distances_local(
+        px, py, count, a, b, np.empty((6, count)), np.empty(4, np.int64), rho, nx, ny
+    )
+    one = np.array([signed_distance_local(x, y, a, b) for x, y in zip(px, py, strict=True)])
+    assert np.array_equal(np.stack([rho, nx, ny], axis=1), one.reshape(count, 3))
