@@ -69,12 +69,13 @@ def test_msd_against_the_double_loop(positions, data):
 
 
 @settings(max_examples=50)
-@given(st.integers(1, 12), st.integers(0, 2**16))
-def test_lu_solve_against_gaussian_elimination(n, seed):
+@given(st.integers(1, 12), st.integers(0, 2**16), st.booleans())
+def test_lu_solve_against_gaussian_elimination(n, seed, transposed):
     rng = np.random.default_rng(seed)
     a = rng.normal(size=(n, n)) + n * np.eye(n) * rng.uniform(0, 1)
     b = rng.normal(size=n)
-    factors, pivots, x = a.copy(), lu_workspace(n), b.copy()
+    stored = np.ascontiguousarray(a.T) if transposed else a.copy()  # what the workspace expects
+    factors, pivots, x = stored, lu_workspace(n, transposed), b.copy()
     assert lu_factor(factors, pivots)
     lu_solve(factors, pivots, x)
     assert np.allclose(x, naive.solve(a, b), rtol=1e-8, atol=1e-8 * np.abs(x).max())

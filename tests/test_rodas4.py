@@ -99,6 +99,21 @@ def test_right_hand_side_matches_the_engine_forces():
     np.testing.assert_allclose(out[2 * m :], expected, rtol=1e-10, atol=1e-12)
 
 
+def test_a_state_s_right_hand_side_does_not_depend_on_the_states_before_it():
+    """The partials' buffers are reset only where the last call left partials: a contact
+    state, then another contact, then one without, each equals a fresh stepper's bytes."""
+    params, modes, pose = _state(4.0, contact=True)
+    model, stepper = _stepper(params)
+    other = pose + np.array([0.0, 0.3, 0.4])  # the bot's tip elsewhere along the membrane
+    far = np.array([0.3, 0.1, 0.0])
+    for p in (pose, other, far, pose):
+        u = pack(modes, p)
+        again = _rhs(model, stepper, u)
+        fresh = _rhs(model, _stepper(params)[1], u)
+        assert np.array_equal(again, fresh)
+    assert np.count_nonzero(stepper.ws.fine.parts) > 0  # the last state has contact
+
+
 class DifferentialBending(EnergyTerm):
     """Bending without second derivatives and not marked smooth: the fallback path."""
 

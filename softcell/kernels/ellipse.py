@@ -15,10 +15,10 @@ import math
 
 from numba import njit
 
-from softcell.config import ELLIPSE_ITERATIONS, JIT
+from softcell.config import ELLIPSE_ITERATIONS, LEAN_JIT
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _bracket(u, v, a, b):
     """The first iterate s = t + b^2 of :func:`_root` and its bracket (lo, hi)."""
     b2, d = b * b, a * a - b * b
@@ -38,7 +38,7 @@ def _bracket(u, v, a, b):
     return s, lo, hi
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _newton(u, v, a, b, s, lo, hi):
     """One safeguarded Newton step of :func:`_root` from s in the bracket (lo, hi):
     ``(s, lo, hi, done)``, with ``done`` when s is the root."""
@@ -63,7 +63,7 @@ def _newton(u, v, a, b, s, lo, hi):
     return s_new, lo, hi, False
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _root(u, v, a, b):
     """Root s = t + b^2 > 0 of F for u, v >= 0, off the degenerate inner major-axis segment.
 
@@ -78,7 +78,7 @@ def _root(u, v, a, b):
     return s
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _four_roots(u, v, a, b, k, out):
     """:func:`_root` of the points k[0..3] of (u, v) into out[k[0..3]], the four
     iterations interleaved (each point's iterates are its own: the same numbers, in a
@@ -105,7 +105,7 @@ def _four_roots(u, v, a, b, k, out):
     out[k[3]] = s3
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _axes(px, py, a, b):
     """|px|, |py| with coordinates 1e-100 of the axes put on them, and the closest point
     (qx, qy) where it needs no root (``known``)."""
@@ -126,7 +126,7 @@ def _axes(px, py, a, b):
     return u, v, False, 0.0, 0.0
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _normal(px, py, u, v, qx, qy, a, b):
     """``(rho, nx, ny)`` of the point from its closest point (qx, qy) in the first quadrant."""
     nx, ny = qx / (a * a), qy / (b * b)
@@ -137,7 +137,7 @@ def _normal(px, py, u, v, qx, qy, a, b):
     return rho, math.copysign(nx, px), math.copysign(ny, py)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def signed_distance_local(px, py, a, b):
     """Signed distance (negative inside) from (px, py) to the ellipse x^2/a^2 + y^2/b^2 = 1,
     in the ellipse's frame, with the outward unit normal at the closest point.
@@ -153,7 +153,7 @@ def signed_distance_local(px, py, a, b):
     return _normal(px, py, u, v, qx, qy, a, b)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def signed_distances_local(px, py, count, a, b, work, lanes, rho, nx, ny):
     """:func:`signed_distance_local` of the points 0..count-1 of (px, py) into ``rho, nx,
     ny``: the same numbers, with the roots of four points found at a time. ``work``:
@@ -179,7 +179,7 @@ def signed_distances_local(px, py, count, a, b, work, lanes, rho, nx, ny):
         rho[i], nx[i], ny[i] = _normal(px[i], py[i], u[i], v[i], qx[i], qy[i], a, b)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def signed_distance(x, y, cx, cy, theta, a, b):
     """Signed distance from the point (x, y) to the ellipse centred at (cx, cy) with its
     semi-major axis a at angle theta (rad), semi-minor axis b.

@@ -29,14 +29,14 @@ import math
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.config import JIT
+from softcell.config import LEAN_JIT
 from softcell.kernels.spectral import AXES
 
 #: Blocks nonzero at no more than this many points are transformed by direct sums, not FFTs.
 SPARSE_POINTS = 48
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
     """out[m - lo] = N^-1 sum_n buf[n] e^{-i m xi_n} for m = lo..hi; ``index[:count]`` lists
     the points where ``buf`` may be nonzero (all of them when count == N, a power of two).
@@ -64,7 +64,7 @@ def _transform(buf, index, count, twiddle, lo, hi, scratch, out):
             out[m - lo] = scratch[m % n]
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _transform_pair(buf_a, buf_b, index, count, twiddle, lo, hi, scratch, out_a, out_b):
     """:func:`_transform` of two buffers nonzero at the same points; the direct sums share
     their twiddle factors (each sum still runs over the points in order)."""
@@ -93,7 +93,7 @@ def _transform_pair(buf_a, buf_b, index, count, twiddle, lo, hi, scratch, out_a,
         out_b[m] = out_b[m] * inv
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _dense_if_many(index, count, n):
     """Past SPARSE_POINTS points, list every point (the block is then transformed by an FFT,
     which reads the whole buffer); return the new count."""
@@ -104,7 +104,7 @@ def _dense_if_many(index, count, n):
     return n
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _order_factor(order, k):
     """(i k)^order for order 0, 1, 2."""
     if order == 0:
@@ -114,7 +114,7 @@ def _order_factor(order, k):
     return -(k * k) + 0.0j
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _force_factor(order, k):
     """c_order(k): the factor of P_hat^order in f_hat_k (-1, i k, k^2)."""
     if order == 0:
@@ -124,7 +124,7 @@ def _force_factor(order, k):
     return (k * k) + 0.0j
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def active_points(hww, hwp, active):
     """Write into ``active`` the points where any second derivative is nonzero; return how
     many there are."""
@@ -155,7 +155,7 @@ FORCE_TURNS = (2, 1, 0)
 ORDER_TURNS = (0, 1, 2)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _turn(z, p):
     """z i^p, exactly (a quarter turn swaps and negates parts)."""
     p %= 4
@@ -168,7 +168,7 @@ def _turn(z, p):
     return complex(z.imag, -z.real)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b):
     """Add block (alpha, beta) (and, for alpha != beta, its transpose) to cal_A, cal_B:
     cal_A_ij += c_al(k_i) (i k_j)^be A_hat(k_i - k_j), cal_B_ij += c_al(k_i) conj((i k_j)^be)
@@ -208,14 +208,14 @@ def _couple(al, be, lc, magnitudes, a_hat, b_hat, rotated, cal_a, cal_b):
                 )
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _split(z, out, row, q):
     """out[row, q], out[row + 1, q] = the real and imaginary parts of z."""
     out[row, q] = z.real
     out[row + 1, q] = z.imag
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def spectral_factors(lc, factors, orders, magnitudes):
     """The tables :func:`assemble_jacobian` reads, for k = -Lc..Lc (column k + Lc):
     ``factors[o]`` = c_o(k) (-1, i k, k^2), ``orders[o]`` = (i k)^o (1, i k, -k^2) and
@@ -228,7 +228,7 @@ def spectral_factors(lc, factors, orders, magnitudes):
 
 
 # A compiled inner loop: exempt from the complexity limit of the rest of the code.
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def assemble_jacobian(  # noqa: C901
     hww,
     hwp,

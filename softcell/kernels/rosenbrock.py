@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from softcell.config import JIT_COMPOSED
-from softcell.kernels.linalg import lu_factor, lu_solve
+from softcell.kernels.linalg import holds_transpose, lu_factor, lu_solve
 
 
 class Tableau(NamedTuple):
@@ -50,10 +50,16 @@ def factor_iteration_matrix(jac, h, gamma, mat, pivots):
     """mat = I / (h gamma) - jac, factored in place; False if it is singular."""
     nu = jac.shape[0]
     fac = 1.0 / (h * gamma)
-    for i in range(nu):
-        for j in range(nu):
-            mat[i, j] = -jac[i, j]
-        mat[i, i] += fac
+    if holds_transpose(pivots, nu):
+        for i in range(nu):
+            for j in range(nu):
+                mat[j, i] = -jac[i, j]
+            mat[i, i] += fac
+    else:
+        for i in range(nu):
+            for j in range(nu):
+                mat[i, j] = -jac[i, j]
+            mat[i, i] += fac
     return lu_factor(mat, pivots)
 
 

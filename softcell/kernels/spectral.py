@@ -11,19 +11,19 @@ import numpy as np
 from numba import njit
 from rocket_fft import c2c
 
-from softcell.config import JIT
+from softcell.config import LEAN_JIT
 
 #: The FFT axis of every 1-D transform (a module constant: no allocation per call).
 AXES = np.zeros(1, dtype=np.int64)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def wavenumber(j: int, n: int) -> int:
     """The wavenumber of FFT bin j of an n-point transform (0, 1, ..., n/2, -n/2+1, ..., -1)."""
     return j if j <= n // 2 else j - n
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def derivative_spectrum(modes, order, spec):
     """Fill ``spec`` (complex128[N]) with the N-point spectrum of the ``order``-th xi-derivative
     of the curve (0, 1 or 2): (i k)^order g_k in FFT bin k mod N, zero elsewhere."""
@@ -31,7 +31,7 @@ def derivative_spectrum(modes, order, spec):
     derivative_bins(modes, order, spec)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def derivative_bins(modes, order, spec):
     """:func:`derivative_spectrum` without clearing ``spec``: writes only the 2 Lc + 1 bins
     of the modes, so every other bin of ``spec`` must be zero already (a buffer that holds
@@ -48,7 +48,7 @@ def derivative_bins(modes, order, spec):
         spec[k % n] = factor * modes[j]
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def evaluate(modes, spec, z, zp, zpp):
     """Curve and its first two xi-derivatives at the N = len(z) collocation points.
 
@@ -61,7 +61,7 @@ def evaluate(modes, spec, z, zp, zpp):
         c2c(spec, out, AXES, False, 1.0, 1)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def assemble(q0, q1, q2, has_q0, has_q1, has_q2, spec, fhat):
     """Force modes f_hat_k = -Q0_hat + i k Q1_hat + k^2 Q2_hat for |k| <= Lc (docs/model.md §3).
 

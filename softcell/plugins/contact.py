@@ -16,14 +16,14 @@ import math
 import numpy as np
 from numba import njit
 
-from softcell.config import CONTACT_CUTOFF_LENGTHS, JIT
+from softcell.config import CONTACT_CUTOFF_LENGTHS, JIT, LEAN_JIT
 from softcell.core.components.contracts import EnergyTerm
 from softcell.core.components.hookspecs import hookimpl
 from softcell.core.params import MODEL_PARAMETERS
 from softcell.kernels.ellipse import signed_distance, signed_distances_local
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _candidate(dx, dy, c, s, a, b, cutoff):
     """Whether the point d = gamma - r_bot may lie within ``cutoff`` of the ellipse, and its
     coordinates in the bot's frame: ``(maybe, px, py)``. Two cheap tests: the circle of
@@ -48,7 +48,7 @@ def _scratch():
     return np.empty((13, CHUNK)), np.empty(CHUNK + 4, np.int64)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _gather(x, y, start, pose, c, s, a, b, cutoff, floats, ints):
     """From point ``start`` on, the next (up to CHUNK) points that pass the cheap tests of
     :func:`_candidate`, with their distances: ``ints[:count]`` their indices and
@@ -71,7 +71,7 @@ def _gather(x, y, start, pose, c, s, a, b, cutoff, floats, ints):
     return count, n
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _setup(pose, context, coefficients):
     """The bot's semi-axes a, b (cm), the cut-off (cm), the force scale (l0 / 2 pi) A /
     lambda (N), lambda (cm), and cos, sin of the bot's heading."""
@@ -128,7 +128,7 @@ def contact_hessian(x, y, xp, yp, xpp, ypp, pose, context, coefficients, hww, hw
                 _add_hessian(ints[k], floats[:, k], c, s, a, b, a2b2, scale, length, hww, hwp, hpp)
 
 
-@njit(**JIT)
+@njit(**LEAN_JIT)
 def _add_hessian(n, point, c, s, a, b, a2b2, scale, length, hww, hwp, hpp):
     """Add the second derivatives at point n (``point``: its column of :func:`_gather`)."""
     px, py, dx, dy = point[0], point[1], point[2], point[3]

@@ -4,7 +4,9 @@ system: the membrane modes, the contact and the bot (~70 unknowns).
 
 Each step factors W = I / (h gamma) - J once, with J the Jacobian of the full right-hand side
 (:mod:`softcell.kernels.jacobian`), and solves six linear systems; the sixth stage is the
-embedded error estimate. Steps adapt to the error (Gustafsson's predictive controller), land
+embedded error estimate. Steps adapt to the error (Gustafsson's predictive controller within
+a phase; after two rejections of one step, the error's observed order in h sets the next try,
+see :func:`softcell.plugins.rodas4_method.step_factor`), land
 exactly on the protocol's switching times (within a step the right-hand side is autonomous),
 and samples come from the method's continuous extension, so the sampling grid never
 constrains the step. Everything runs inside one compiled loop; nothing is allocated per step.
@@ -40,6 +42,7 @@ from softcell.kernels.jacobian import spectral_factors
 from softcell.kernels.linalg import lu_workspace
 from softcell.plugins.rodas4_method import (  # shared with the template rodas4_loop.py
     ERR_ACCEPTED,
+    H_ACCEPTED,
     H_LAST,
     H_NEXT,
     JACOBIANS,
@@ -79,6 +82,8 @@ Grid = namedtuple(
         "index",
         "active",
         "n_active",
+        "touched",
+        "n_touched",
         "buf_a",
         "buf_b",
         "scratch",
@@ -147,6 +152,8 @@ def grid(n: int, m: int) -> Grid:
         index=np.zeros(n, np.int64),
         active=np.zeros(n, np.int64),
         n_active=np.zeros(1, np.int64),
+        touched=np.zeros(n, np.int64),
+        n_touched=np.zeros(1, np.int64),
         buf_a=np.zeros(n, c),
         buf_b=np.zeros(n, c),
         scratch=np.zeros(n, c),
@@ -185,7 +192,7 @@ def workspace(model: Model, smooth_nodes: int) -> Workspace:
         rotated=np.zeros((8, 4 * lc + 1)),
         jac=np.zeros((nu, nu)),
         mat=np.zeros((nu, nu)),
-        pivots=lu_workspace(nu),
+        pivots=lu_workspace(nu, transposed=True),
         k=np.zeros((6, nu)),
         f0=np.zeros(nu),
         y=np.zeros(nu),
@@ -372,7 +379,7 @@ def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
     work = GroupWork(
         jac=np.zeros((size, size)),
         mat=np.zeros((size, size)),
-        pivots=lu_workspace(size),
+        pivots=lu_workspace(size, transposed=True),
         k=np.zeros((6, size)),
         f0=np.zeros(size),
         y=np.zeros(size),
@@ -553,6 +560,7 @@ class Rodas4Stepper(Stepper):
         u = np.concatenate([s["u"] for s in states])
         clock = states[0]["clock"].copy()
         clock[H_NEXT] = min(s["clock"][H_NEXT] for s in states)
+        clock[H_ACCEPTED] = 0.0  # no step of this group to predict from yet
         p = np.array([s["phase_index"][0] for s in states], dtype=np.int64)
         counters = np.zeros(4, dtype=np.int64)
         dense = np.concatenate([s["dense"] for s in states], axis=1)

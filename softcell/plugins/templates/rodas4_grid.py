@@ -37,8 +37,7 @@ def forces(modes, pose, order, context, coefficients, g):
         for i in range(n):
             g.w[2 * o, i] = g.curve[o, i].real
             g.w[2 * o + 1, i] = g.curve[o, i].imag
-    rows = 2 * order + 2
-    g.parts[:rows, :] = 0.0
+    _reset(g.parts, 2 * order + 2, g.touched, g.n_touched[0])
     g.dpose[:] = 0.0
     p = g.parts
     partials(
@@ -72,9 +71,24 @@ def forces(modes, pose, order, context, coefficients, g):
 
 
 @njit(**LEAN_JIT_FLAGS)
+def _reset(parts, rows, touched, count):
+    """Zero the first ``rows`` rows of ``parts`` where the last call left partials
+    (``touched[:count]``, which :func:`_scan` lists): the rest are zero already. A grid
+    where most points carried partials is zeroed whole."""
+    if 4 * count > parts.shape[1]:
+        parts[:rows, :] = 0.0
+        return
+    for t in range(count):
+        i = touched[t]
+        for r in range(rows):
+            parts[r, i] = 0.0
+
+
+@njit(**LEAN_JIT_FLAGS)
 def _scan(p, order, g):
     """List in g.index the points where the zeroth-order partials are nonzero and in
-    g.active those where any is (their count in g.n_active); return the first count and
+    g.active those where any is (their count in g.n_active, and a copy in g.touched for
+    :func:`_reset`: g.active may be rewritten by the Jacobian); return the first count and
     whether any first- and second-order partial is nonzero."""
     n = p.shape[1]
     count = 0
@@ -95,8 +109,10 @@ def _scan(p, order, g):
             zero = False
         if not zero:
             g.active[n_active] = i
+            g.touched[n_active] = i
             n_active += 1
     g.n_active[0] = n_active
+    g.n_touched[0] = n_active
     return count, first, second
 
 

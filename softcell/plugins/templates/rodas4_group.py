@@ -28,7 +28,6 @@ from softcell.kernels.rosenbrock import (
 from softcell.plugins.rodas4_method import (
     ERR_ACCEPTED,
     GAMMA,
-    GROW_LIMIT,
     H_ACCEPTED,
     H_LAST,
     H_NEXT,
@@ -37,13 +36,12 @@ from softcell.plugins.rodas4_method import (
     REJECTED,
     REJECTED_LAST,
     RHS_CALLS,
-    SAFETY,
-    SHRINK_LIMIT,
     SINGULAR,
     STEP_UNDERFLOW,
     STEPS,
     T_LAST,
     T,
+    step_factor,
 )
 
 #: The names this template expects the loader to bind (besides the flags).
@@ -157,6 +155,7 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
             return TOO_MANY_CONTACTS
         counters[RHS_CALLS] += 1
         counters[JACOBIANS] += 1
+        h_rejected = err_rejected = 0.0
         while True:
             h = min(clock[H_NEXT], max_step)
             land = False
@@ -185,12 +184,8 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
             err = error_norm(u, gw.y, gw.k, atol, rtol, gw.ynew)
             if not math.isfinite(err):
                 err = 1e10
-            fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err**0.25 / SAFETY))
+            fac = step_factor(err, h, clock, h_rejected, err_rejected)
             if err <= 1.0:
-                if counters[STEPS] > 0:
-                    gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
-                    gus = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, gus / SAFETY))
-                    fac = max(fac, gus)
                 h_new = h / fac
                 if clock[REJECTED_LAST] > 0.0:
                     h_new = min(h_new, h)
@@ -204,6 +199,7 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
                 clock[H_LAST] = h
                 if land:
                     t = t_switch
+                    clock[H_ACCEPTED] = 0.0
                     for c in range(p.size):
                         nxt = offsets[c] + p[c] + 1
                         if nxt < offsets[c + 1] and starts[nxt] <= t_switch:
@@ -214,6 +210,7 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
                 clock[H_NEXT] = h_new
                 counters[STEPS] += 1
                 break
+            h_rejected, err_rejected = h, err
             clock[H_NEXT] = h / fac
             clock[REJECTED_LAST] = 1.0
             counters[REJECTED] += 1

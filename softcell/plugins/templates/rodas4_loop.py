@@ -30,7 +30,6 @@ from softcell.kernels.rosenbrock import (
 from softcell.plugins.rodas4_method import (
     ERR_ACCEPTED,
     GAMMA,
-    GROW_LIMIT,
     H_ACCEPTED,
     H_LAST,
     H_NEXT,
@@ -39,14 +38,13 @@ from softcell.plugins.rodas4_method import (
     REJECTED,
     REJECTED_LAST,
     RHS_CALLS,
-    SAFETY,
-    SHRINK_LIMIT,
     SINGULAR,
     STEP_UNDERFLOW,
     STEPS,
     T_LAST,
     T,
     accumulate,
+    step_factor,
 )
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
@@ -288,6 +286,7 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
         jacobian(u, phase, datum, problem, ws)
         counters[RHS_CALLS] += 1
         counters[JACOBIANS] += 1
+        h_rejected = err_rejected = 0.0
         while True:
             h = min(clock[H_NEXT], max_step)
             land = False
@@ -316,12 +315,8 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
             err = error_norm(u, y, k, atol, rtol, ynew)
             if not math.isfinite(err):
                 err = 1e10
-            fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err**0.25 / SAFETY))
+            fac = step_factor(err, h, clock, h_rejected, err_rejected)
             if err <= 1.0:
-                if counters[STEPS] > 0:
-                    gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
-                    gus = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, gus / SAFETY))
-                    fac = max(fac, gus)
                 h_new = h / fac
                 if clock[REJECTED_LAST] > 0.0:
                     h_new = min(h_new, h)
@@ -346,13 +341,16 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
                         u[i] = ws.y[i]
                     end_phase(starts, p, t_new, log)
                     p += 1
+                    clock[H_ACCEPTED] = 0.0
                 elif land:
                     p += 1
+                    clock[H_ACCEPTED] = 0.0
                 t = t_new
                 clock[T] = t
                 clock[H_NEXT] = h_new
                 counters[STEPS] += 1
                 break
+            h_rejected, err_rejected = h, err
             clock[H_NEXT] = h / fac
             clock[REJECTED_LAST] = 1.0
             counters[REJECTED] += 1
