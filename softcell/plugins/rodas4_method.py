@@ -157,7 +157,7 @@ def step_factor(err, h, clock, h_rejected, err_rejected):
         q = max(1.0, min(ERROR_ORDER, q))
     fac = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, err ** (1.0 / q) / SAFETY))
     if err <= 1.0 and clock[H_ACCEPTED] > 0.0:
-        gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** 0.25
+        gus = (clock[H_ACCEPTED] / h) * (err * err / clock[ERR_ACCEPTED]) ** (1.0 / ERROR_ORDER)
         gus = max(1.0 / GROW_LIMIT, min(1.0 / SHRINK_LIMIT, gus / SAFETY))
         fac = max(fac, gus)
     return fac
