@@ -72,7 +72,7 @@ def test_analytic_second_derivatives_match_the_fallback(name):
         assert np.count_nonzero(analytic[1]) > 0 and np.abs(analytic[2]).max() > 0
 
 
-@pytest.mark.parametrize("radius, contact", [(4.0, True), (12.0, False)])
+@pytest.mark.parametrize("radius, contact", [(4.0, True), (8.0, True), (12.0, False)])
 def test_jacobian_matches_differences_of_the_right_hand_side(radius, contact):
     params, modes, pose = _state(radius, contact)
     model, stepper = _stepper(params)

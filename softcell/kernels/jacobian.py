@@ -105,6 +105,89 @@ def _dense_if_many(index, count, n):
 
 
 @njit(**LEAN_JIT)
+def _count_pose_points(hwp, al, c, active, n_active, index):
+    """List in ``index`` the active points where block (al, pose c) of ``hwp`` is nonzero;
+    return how many there are."""
+    count = 0
+    for t in range(n_active):
+        i = active[t]
+        if hwp[i, 2 * al, c] != 0.0 or hwp[i, 2 * al + 1, c] != 0.0:
+            index[count] = i
+            count += 1
+    return count
+
+
+@njit(**LEAN_JIT)
+def _shared_pose_points(hwp, al, active, n_active, index):
+    """Where the three pose columns of order ``al`` in ``hwp`` are nonzero among the active
+    points: 0 if at none; if at the same points, no more than SPARSE_POINTS of them, their
+    number (listed in ``index``); otherwise -1."""
+    count = 0
+    shared = True
+    for t in range(n_active):
+        i = active[t]
+        nonzero = 0
+        for c in range(3):
+            if hwp[i, 2 * al, c] != 0.0 or hwp[i, 2 * al + 1, c] != 0.0:
+                nonzero += 1
+        if nonzero == 0:
+            continue
+        if nonzero < 3 or count == SPARSE_POINTS:
+            shared = False
+        elif shared:
+            index[count] = i
+        count += 1
+    return count if shared or count == 0 else -1
+
+
+@njit(**LEAN_JIT)
+def _direct_triple(buf_0, buf_1, buf_2, index, count, twiddle, lo, hi, out_0, out_1, out_2):
+    """The direct sums of :func:`_transform` of three buffers nonzero at the same ``count``
+    (<= SPARSE_POINTS) points, sharing their twiddle factors (each sum still runs over the
+    points in order: the same numbers as three calls)."""
+    inv = 1.0 / buf_0.size
+    mask = buf_0.size - 1
+    for m in range(hi - lo + 1):
+        out_0[m] = 0.0 + 0.0j
+        out_1[m] = 0.0 + 0.0j
+        out_2[m] = 0.0 + 0.0j
+    for t in range(count):
+        i = index[t]
+        value_0, value_1, value_2 = buf_0[i], buf_1[i], buf_2[i]
+        c = (lo * i) & mask
+        for m in range(hi - lo + 1):
+            w = twiddle[c]
+            out_0[m] += value_0 * w
+            out_1[m] += value_1 * w
+            out_2[m] += value_2 * w
+            c = (c + i) & mask
+    for m in range(hi - lo + 1):
+        out_0[m] = out_0[m] * inv
+        out_1[m] = out_1[m] * inv
+        out_2[m] = out_2[m] * inv
+
+
+@njit(**LEAN_JIT)
+def _pose_coupling(
+    al, c, g_hat, m_count, base, mobility, bot_mobility, weight, n, factors, orders, jac
+):
+    """Add to ``jac`` the coupling of the modes and pose coordinate c through the transform
+    ``g_hat`` (complex128[2 Lc + 1]) of block (al, c) of the mixed derivatives: the column
+    of c (the force modes' response) and its row (the pose's response to the modes;
+    ``weight`` = 2 pi / n, the weight of each of the n points)."""
+    for i in range(m_count):
+        v = factors[al, i] * g_hat[i]
+        jac[i, base + c] += mobility * v.real
+        jac[m_count + i, base + c] += mobility * v.imag
+    # d dpose_c = Re(N conj(G_hat(k_j)) (i k_j)^al delta g_j)
+    scale = bot_mobility[c] * weight * n
+    for j in range(m_count):
+        t = g_hat[j].conjugate() * orders[al, j]
+        jac[base + c, j] -= scale * t.real
+        jac[base + c, m_count + j] += scale * t.imag
+
+
+@njit(**LEAN_JIT)
 def _order_factor(order, k):
     """(i k)^order for order 0, 1, 2."""
     if order == 0:
@@ -312,13 +395,39 @@ def assemble_jacobian(  # noqa: C901
             jac[i, m_count + j] -= mobility * d.imag
             jac[m_count + i, m_count + j] += mobility * d.real
     for al in range(3):
+        count = _shared_pose_points(hwp, al, active, n_active, index)
+        if count == 0:
+            continue
+        if count > 0:
+            # All three pose columns nonzero at the same few points (the contact, whose
+            # every point depends on the pose): their direct sums share the twiddle factors.
+            for t in range(count):
+                i = index[t]
+                buf_a[i] = complex(hwp[i, 2 * al, 0], hwp[i, 2 * al + 1, 0])
+                buf_b[i] = complex(hwp[i, 2 * al, 1], hwp[i, 2 * al + 1, 1])
+                scratch[i] = complex(hwp[i, 2 * al, 2], hwp[i, 2 * al + 1, 2])
+            _direct_triple(
+                buf_a, buf_b, scratch, index, count, twiddle, -lc, lc, g_hat, a_hat, b_hat
+            )
+            transforms = (g_hat, a_hat, b_hat)
+            for c in range(3):
+                _pose_coupling(
+                    al,
+                    c,
+                    transforms[c],
+                    m_count,
+                    base,
+                    mobility,
+                    bot_mobility,
+                    weight,
+                    n,
+                    factors,
+                    orders,
+                    jac,
+                )
+            continue
         for c in range(3):
-            count = 0
-            for t in range(n_active):
-                i = active[t]
-                if hwp[i, 2 * al, c] != 0.0 or hwp[i, 2 * al + 1, c] != 0.0:
-                    index[count] = i
-                    count += 1
+            count = _count_pose_points(hwp, al, c, active, n_active, index)
             if count == 0:
                 continue
             count = _dense_if_many(index, count, n)
@@ -326,16 +435,20 @@ def assemble_jacobian(  # noqa: C901
                 i = index[t]
                 buf_a[i] = complex(hwp[i, 2 * al, c], hwp[i, 2 * al + 1, c])
             _transform(buf_a, index, count, twiddle, -lc, lc, scratch, g_hat)
-            for i in range(m_count):
-                v = factors[al, i] * g_hat[i]
-                jac[i, base + c] += mobility * v.real
-                jac[m_count + i, base + c] += mobility * v.imag
-            # d dpose_c = Re(N conj(G_hat(k_j)) (i k_j)^al delta g_j)
-            scale = bot_mobility[c] * weight * n
-            for j in range(m_count):
-                t = g_hat[j].conjugate() * orders[al, j]
-                jac[base + c, j] -= scale * t.real
-                jac[base + c, m_count + j] += scale * t.imag
+            _pose_coupling(
+                al,
+                c,
+                g_hat,
+                m_count,
+                base,
+                mobility,
+                bot_mobility,
+                weight,
+                n,
+                factors,
+                orders,
+                jac,
+            )
     for c in range(3):
         for d in range(3):
             jac[base + c, base + d] -= bot_mobility[c] * weight * hpp[c, d]
