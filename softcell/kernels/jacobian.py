@@ -123,7 +123,6 @@ def _shared_pose_points(hwp, al, active, n_active, index):
     points: 0 if at none; if at the same points, no more than SPARSE_POINTS of them, their
     number (listed in ``index``); otherwise -1."""
     count = 0
-    shared = True
     for t in range(n_active):
         i = active[t]
         nonzero = 0
@@ -133,11 +132,10 @@ def _shared_pose_points(hwp, al, active, n_active, index):
         if nonzero == 0:
             continue
         if nonzero < 3 or count == SPARSE_POINTS:
-            shared = False
-        elif shared:
-            index[count] = i
+            return -1
+        index[count] = i
         count += 1
-    return count if shared or count == 0 else -1
+    return count
 
 
 @njit(**LEAN_JIT)
