@@ -365,7 +365,66 @@ ANALYSIS_VARIABLES: dict[str, VariableSpec] = {
             "mean stop duration with the threshold shifted",
         ),
         VariableSpec(
-            "mean_speed", (SWEEP, "body"), "f", "cm s-1", "mean speed (finest sampling segment)"
+            "mean_go_duration_interval",
+            (SWEEP, "body", "detection_interval"),
+            "f",
+            "s",
+            "mean go duration with the speed measured over a longer interval",
+        ),
+        VariableSpec(
+            "mean_stop_duration_interval",
+            (SWEEP, "body", "detection_interval"),
+            "f",
+            "s",
+            "mean stop duration with the speed measured over a longer interval",
+        ),
+        VariableSpec(
+            "mean_go_duration_systematic",
+            (SWEEP, "body"),
+            "f",
+            "s",
+            "systematic uncertainty of the mean go duration from the detector",
+            {
+                "definition": "the largest change of the mean when the threshold moves by "
+                "-/+ threshold_shift or the speed is measured over the interval nearest "
+                "1/30 s (the experiments' frame rate)"
+            },
+        ),
+        VariableSpec(
+            "mean_stop_duration_systematic",
+            (SWEEP, "body"),
+            "f",
+            "s",
+            "systematic uncertainty of the mean stop duration from the detector",
+            {
+                "definition": "the largest change of the mean when the threshold moves by "
+                "-/+ threshold_shift or the speed is measured over the interval nearest "
+                "1/30 s (the experiments' frame rate)"
+            },
+        ),
+        VariableSpec(
+            "go_duration_second_moment",
+            (SWEEP, "body"),
+            "f",
+            "s2",
+            "mean squared go duration <tau_g^2>",
+        ),
+        VariableSpec(
+            "msd_slope_affine",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "D hat of the fit MSD = D hat tau + b at long lags (unbiased by the MSD's offset)",
+        ),
+        VariableSpec(
+            "msd_slope_renewal",
+            (SWEEP, "body"),
+            "f",
+            "cm2 s-1",
+            "renewal theory's D hat = v0_hat^2 <tau_g^2> / <tau_g>",
+        ),
+        VariableSpec(
+            "mean_speed", (SWEEP, "body"), "f", "cm s-1", "mean speed (the stop/go record)"
         ),
         VariableSpec(
             "v0_hat",
@@ -415,21 +474,11 @@ ANALYSIS_VARIABLES: dict[str, VariableSpec] = {
             "v of the fit MSD = v^2 tau^2 at short lags",
         ),
         VariableSpec(
-            "ballistic_velocity_error",
-            (SWEEP, "body"),
-            "f",
-            "cm s-1",
-            "standard error of ballistic_velocity",
-        ),
-        VariableSpec(
             "msd_slope",
             (SWEEP, "body"),
             "f",
             "cm2 s-1",
             "D hat of the fit MSD = D hat tau at long lags (the paper's D hat)",
-        ),
-        VariableSpec(
-            "msd_slope_error", (SWEEP, "body"), "f", "cm2 s-1", "standard error of msd_slope"
         ),
         VariableSpec(
             "crossover_time",
@@ -510,13 +559,6 @@ ANALYSIS_VARIABLES: dict[str, VariableSpec] = {
             "mean cosine of the angle between consecutive go displacements",
         ),
         VariableSpec(
-            "go_turn_cosine_realization",
-            (SWEEP, "body", "realization"),
-            "f",
-            "1",
-            "mean cosine between consecutive go displacements, per realization",
-        ),
-        VariableSpec(
             "go_turn_pairs",
             (SWEEP, "body", "realization"),
             "i",
@@ -556,6 +598,68 @@ ANALYSIS_VARIABLES: dict[str, VariableSpec] = {
         ),
     )
 }
+
+#: Quantities with a value per realization (``NAME_realization``) and a standard error
+#: across realizations (``NAME_error``): per body, then per point.
+BODY_QUANTITIES = (
+    "mean_go_duration",
+    "mean_stop_duration",
+    "go_duration_second_moment",
+    "mean_speed",
+    "v0_hat",
+    "go_fraction",
+    "ballistic_velocity",
+    "msd_slope",
+    "msd_slope_affine",
+    "diffusion_coefficient",
+    "crossover_time",
+    "confined_diffusion_coefficient",
+    "msd_slope_theory",
+    "msd_slope_renewal",
+    "green_kubo_slope",
+    "go_turn_cosine",
+)
+POINT_QUANTITIES = ("ipr_mean", "gc_distance", "gc_distance_ratio")
+#: Per-realization counts behind the pooled quantities.
+REALIZATION_COUNTS = {
+    "go_events": "number of complete go phases",
+    "stop_events": "number of complete stop phases",
+    "speed_samples": "number of speed samples",
+    "labelled_samples": "number of samples with a stop/go label",
+}
+
+
+def _with_errors(variables: dict[str, VariableSpec]) -> dict[str, VariableSpec]:
+    """``variables`` and, for each quantity, its per-realization values and its error."""
+    out = dict(variables)
+    for name in (*BODY_QUANTITIES, *POINT_QUANTITIES):
+        base = variables[name]
+        out[f"{name}_realization"] = VariableSpec(
+            f"{name}_realization",
+            (*base.dims, "realization"),
+            base.kind,
+            base.units,
+            f"{base.long_name}, per realization",
+        )
+        out[f"{name}_error"] = VariableSpec(
+            f"{name}_error",
+            base.dims,
+            base.kind,
+            base.units,
+            f"standard error of {name} across realizations",
+        )
+    for name, long_name in REALIZATION_COUNTS.items():
+        out[f"{name}_realization"] = VariableSpec(
+            f"{name}_realization",
+            (SWEEP, "body", "realization"),
+            "i",
+            "1",
+            f"{long_name}, per realization",
+        )
+    return out
+
+
+ANALYSIS_VARIABLES = _with_errors(ANALYSIS_VARIABLES)
 
 #: Global attributes every file carries, and those a simulation adds.
 REQUIRED_ATTRS = ("Conventions", "title", "source", "softcell_version", "softcell_origin")

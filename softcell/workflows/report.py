@@ -178,6 +178,19 @@ def _findings_blocks(rows) -> list[Block]:
     ]
 
 
+def _pivots(out: Path) -> dict[float, Any]:
+    """The free bot's analyses tumbling about a pivot, by its offset (cm), that ``out``
+    holds."""
+    from softcell.io.netcdf import read_dataset
+    from softcell.workflows.reproduce import PIVOTS
+
+    return {
+        offset: read_dataset(out / f"{folder}_analysis.nc")
+        for folder, offset in PIVOTS.items()
+        if (out / f"{folder}_analysis.nc").exists()
+    }
+
+
 def write_report(
     out: str | os.PathLike[str],
     *,
@@ -210,7 +223,7 @@ def write_report(
     command = f"softcell reproduce --{design.name} -o {out} --seed {seed}"
     contact_path = out / "contact.nc"
     contact = read_dataset(contact_path) if contact_path.exists() else None
-    rows = findings(analysis, free_bot, seed, _tracked(out, video), contact)
+    rows = findings(analysis, free_bot, seed, _tracked(out, video), contact, _pivots(out))
 
     blocks = [
         Block("h1", 'softcell: reproduction of "Run and tumble dynamics of a soft robotic cell"'),

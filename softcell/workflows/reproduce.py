@@ -5,6 +5,8 @@ directory::
 
     simulations/            one file per (radius, realization)     softcell simulate
     free_bot/               the bot without a membrane (S1)
+    free_bot_pivot1/        the same, tumbling about a pivot 1 cm off-centre (the paper's
+    free_bot_pivot1.53/     robot), and 1.53 cm (its published digital twin)
     analysis.nc             the sweep's analysis                    softcell analyze
     free_bot_analysis.nc
     contact.nc              the membrane's force and torque on the bot, per radius
@@ -130,6 +132,18 @@ def _config(design: Design, radius: float | list[float] | None = None) -> RunCon
     if design.duration is not None:
         values["duration"] = design.duration
     return RunConfig(parameters=values).updated(components=design.components)
+
+
+#: The free bot tumbling about a pivot off its centre (pivot_run_and_tumble), by folder:
+#: the pivot offset (cm) of the paper's robot and of its published digital twin.
+PIVOTS = {"free_bot_pivot1": 1.0, "free_bot_pivot1.53": 1.53}
+
+
+def _pivot_config(free: RunConfig, offset: float) -> RunConfig:
+    return free.updated(
+        parameters={"pivot_offset": offset},
+        components={"driving_protocol": "pivot_run_and_tumble"},
+    )
 
 
 #: The request a results directory was made for: design, seed, version (checked on a rerun).
@@ -314,6 +328,10 @@ def reproduce(
         for cfg, folder, count, membrane in (
             (config, "simulations", design.realizations, True),
             (free, "free_bot", design.free_bot_realizations, False),
+            *(
+                (_pivot_config(free, offset), folder, design.free_bot_realizations, False)
+                for folder, offset in PIVOTS.items()
+            ),
         )
     )
     check_writable(out, need)
@@ -349,19 +367,23 @@ def reproduce(
                 log=say,
                 registry=registry,
             )
-        with step("free_bot", "simulating the free bot"):
-            simulate(
-                free,
-                out / "free_bot",
-                realizations=design.free_bot_realizations,
-                seed=seed,
-                client=client,
-                membrane=False,
-                progress=progress,
-                overwrite=overwrite,
-                log=say,
-                registry=registry,
-            )
+        with step("free_bot", "simulating the free bot (turning about its centre and pivots)"):
+            for cfg, folder in (
+                (free, "free_bot"),
+                *((_pivot_config(free, offset), folder) for folder, offset in PIVOTS.items()),
+            ):
+                simulate(
+                    cfg,
+                    out / folder,
+                    realizations=design.free_bot_realizations,
+                    seed=seed,
+                    client=client,
+                    membrane=False,
+                    progress=progress,
+                    overwrite=overwrite,
+                    log=say,
+                    registry=registry,
+                )
     figures, video = _analyses_video_figures(
         out, design, seed, options, progress, registry, outcome, step
     )
@@ -479,8 +501,9 @@ def _analyses(
         registry=registry,
     )
     write_dataset(analysis, out / "analysis.nc")
-    free_analysis = analyze(open_dataset(out / "free_bot"), options, registry=registry)
-    write_dataset(free_analysis, out / "free_bot_analysis.nc")
+    for folder in ("free_bot", *PIVOTS):
+        free_analysis = analyze(open_dataset(out / folder), options, registry=registry)
+        write_dataset(free_analysis, out / f"{folder}_analysis.nc")
     # The membrane's reaction on the bot (the paper's steering mechanism), per radius.
     write_dataset(
         contact_summary(out / "simulations", discard=design.discard, registry=registry),

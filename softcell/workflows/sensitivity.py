@@ -282,9 +282,6 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     value; the regimes at 4 and 12 cm); and every finding's verdict and measured text.
     """
     from softcell.core.analysis.options import analysis_options
-    from softcell.core.analysis.series import segments
-    from softcell.core.analysis.stopgo import GO, durations
-    from softcell.core.analysis.sweep import LagPlan
     from softcell.core.schema import REGIME_NAMES
     from softcell.io.netcdf import open_dataset, read_dataset
 
@@ -294,20 +291,7 @@ def measure(folder: str | os.PathLike[str]) -> dict[str, Any]:
     sims = open_dataset(folder / "simulations")
     radii = np.asarray(analysis["radius"].values, dtype=float)
     opts = analysis_options(json.loads(analysis.attrs["softcell_analysis_options"]))
-    time = np.asarray(analysis["time"].values, dtype=float)
-    only = (
-        segments(time).index(LagPlan(time, opts).fine)
-        if opts["stopgo_segments"] == "finest"
-        else None
-    )
-
-    labels = np.asarray(analysis["stopgo_label"].sel(body="cell").values)
-    tau_g = np.array(
-        [
-            [durations(labels[i, r], time, only).mean(GO) for r in range(labels.shape[1])]
-            for i in range(labels.shape[0])
-        ]
-    )
+    tau_g = np.asarray(analysis["mean_go_duration_realization"].sel(body="cell").values)
     keep = np.asarray(sims["time"].values) >= float(sims["time"].values[0]) + opts["discard"]
     gap = np.hypot(
         np.asarray(sims["bot_x"].values) - np.asarray(sims["cell_x"].values),

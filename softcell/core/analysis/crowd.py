@@ -4,10 +4,12 @@ it, and what the crowd does together (docs/analysis.md, "Assemblies").
 Per cell, :func:`analyze_assembly` runs :func:`~softcell.core.analysis.sweep.analyze` with
 the cells of each realization taken as realizations of their own, then puts the ``cell``
 dim back: the MSD, D hat, stop/go and the fits are pooled over cells and realizations;
-speeds, labels, the shape index and the per-realization MSD are per cell. Cells of one
-assembly push each other, so they are not independent samples: the MSD's error
-(``msd_sem``) is the standard error across realizations of the cells' mean MSD when there
-are two or more, and across cells (marked so) when there is one.
+speeds, labels, the shape index, the per-realization MSD and every ``NAME_realization``
+value are per cell. Cells of one assembly push each other, so they are not independent
+samples: every ``NAME_error`` comes from a bootstrap that draws whole realizations (all
+their cells together), and is NaN for one realization; the MSD's error (``msd_sem``) is
+the standard error across realizations of the cells' mean MSD when there are two or more,
+and across cells (marked so) when there is one.
 
 What the crowd does, at samples ``crowd_every`` s apart after the discard (freud computes
 the neighbours, clusters, the Voronoi tessellation and g(r); a periodic box by the minimum
@@ -511,7 +513,10 @@ def analyze_assembly(
     opts = crowd_options(crowd, ds.sizes["cell"], boundary)
     lead = [d for d in ds["cell_x"].dims if d not in ("realization", "time", "cell")]
     opts["pair_distance_max"] = _pair_reach(ds, opts["pair_distance_max"])
-    per_cell = analyze(cells_as_realizations(ds), options, progress=progress, registry=registry)
+    blocks = np.repeat(np.arange(ds.sizes["realization"]), ds.sizes["cell"])
+    per_cell = analyze(
+        cells_as_realizations(ds), options, progress=progress, registry=registry, blocks=blocks
+    )
     out = cells_back(per_cell, ds)
     _msd_error_across_realizations(out)
     time = np.asarray(out["time"].values)

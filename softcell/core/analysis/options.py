@@ -101,6 +101,26 @@ ANALYSIS_OPTIONS: dict[str, ParameterSpec] = {
             kind=str,
             choices=("all", "finest"),
         ),
+        ParameterSpec(
+            "stopgo_record",
+            "fine",
+            "1",
+            "where the stop/go phases come from: 'fine', the bodies' fine record over the "
+            "whole run where the file has one (one sampling interval: the same cell gives the "
+            "same durations whatever the sampling design), or 'sampled', the samples of the "
+            "time axis (segment by segment, see stopgo_segments)",
+            kind=str,
+            choices=("fine", "sampled"),
+        ),
+        ParameterSpec(
+            "resamples",
+            1000,
+            "1",
+            "bootstrap resamples of the realizations behind every error",
+            kind=int,
+            minimum=2,
+            minimum_inclusive=True,
+        ),
         dataclasses.replace(
             THRESHOLD,
             default=None,

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from softcell._version import __version__
-from softcell.core.analysis import correlation, fits, stopgo
+from softcell.core.analysis import correlation, fits, stopgo, uncertainty
 from softcell.core.analysis.detector import DetectorChoice, choose_detector, split_options
 from softcell.core.analysis.msd import log_lags, msd_sums
 from softcell.core.analysis.options import analysis_options, options_attrs
@@ -169,26 +169,19 @@ def collapse_spread(
     return float(ys.std(axis=0, ddof=1).mean())
 
 
-#: Per-(point, body) scalars of :func:`_body_statistics` (float, NaN when undefined).
+#: Per-(point, body) scalars of :func:`_body_statistics` that are not quantities with an
+#: error across realizations (float, NaN when undefined).
 SCALARS = (
-    "mean_speed",
-    "v0_hat",
-    "mean_go_duration",
-    "mean_stop_duration",
-    "go_fraction",
     "go_ks_statistic",
     "go_ks_pvalue",
     "stop_ks_statistic",
     "stop_ks_pvalue",
-    "ballistic_velocity",
-    "ballistic_velocity_error",
-    "msd_slope",
-    "msd_slope_error",
-    "crossover_time",
-    "confined_diffusion_coefficient",
     "ballistic_window_end",
     "diffusive_window_start",
 )
+#: Detection intervals of the stop/go systematic, in samples of a uniform stop/go record:
+#: the record's own, the one nearest 1/30 s (the experiments' frame rate), and 0.1 s.
+FRAME_INTERVAL, COARSE_INTERVAL = 1 / 30, 0.1
 
 
 def _fine_record(
@@ -253,6 +246,9 @@ class _Setup:
             if opts["stopgo_segments"] == "finest"
             else None
         )
+        self._stopgo_record(ds, opts, time_all[0] + opts["discard"])
+        self.seed = int(ds.attrs.get("softcell_seed", 0))
+        self.blocks: np.ndarray | None = None
         self.lead = sweep_dims(ds)
         self.points = _points(ds, self.lead)
         self.segment = segment_index(self.time)
@@ -268,6 +264,49 @@ class _Setup:
             max(self.correlation_grid.size - 2, 0),
         )
 
+    def _stopgo_record(self, ds: xr.Dataset, opts: Mapping[str, Any], start: float) -> None:
+        """Where the stop/go phases come from: the bodies' fine record (from ``start``, s)
+        where the file has one and option ``stopgo_record`` is 'fine', else the sampled
+        record; the index of each kept sample time in it (-1: not in it), and the detection
+        intervals (in samples) of the systematic."""
+        has_fine = all(n in ds.variables for n in ("fine_time", *FINE_BODY_VARIABLES))
+        self.stopgo_keep: np.ndarray | None = None
+        self.stopgo_time, self.stopgo_only, self.stopgo_index = self.time, self.only, None
+        if opts["stopgo_record"] == "fine" and has_fine:
+            fine = np.asarray(ds["fine_time"].values, dtype=np.float64)
+            self.stopgo_keep = fine >= start
+            self.stopgo_time, self.stopgo_only = fine[self.stopgo_keep], None
+            self.stopgo_index = decimation_index(self.stopgo_time, self.time)
+        elif opts["stopgo_record"] == "fine" and len(segments(self.time)) > 1:
+            warnings.warn(
+                "this dataset has no fine record of the bodies: its stop/go phases come from "
+                "the sampled record, segment by segment, and their durations depend on the "
+                "sampling design (a coarse interval misses short phases); simulate again for "
+                "durations from one record",
+                AnalysisWarning,
+                stacklevel=5,
+            )
+        segs = segments(self.stopgo_time)
+        self.stopgo_fine_segment = segs.index(
+            max(segs, key=lambda g: (-g.interval, g.last - g.first))
+        )
+        interval = segs[self.stopgo_fine_segment].interval
+        factors = [1]
+        if len(segs) == 1:
+            factors += [max(1, round(t / interval)) for t in (FRAME_INTERVAL, COARSE_INTERVAL)]
+        self.factors = sorted(set(factors))
+        self.frame_factor = max(1, round(FRAME_INTERVAL / interval)) if len(segs) == 1 else 1
+        self.detection_interval = interval * np.asarray(self.factors, dtype=np.float64)
+
+
+def decimation_index(record: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """int64[T]: the index of each of ``times`` (s) in the increasing ``record`` (s), -1
+    where it has no sample within 1e-6 of the record's interval."""
+    at = np.clip(np.searchsorted(record, times), 1, max(record.size - 1, 1))
+    left = np.where(np.abs(record[at - 1] - times) <= np.abs(record[at] - times), at - 1, at)
+    step = float(np.min(np.diff(record))) if record.size > 1 else 1.0
+    return np.where(np.abs(record[left] - times) <= 1e-6 * step, left, -1)
+
 
 class _Results:
     """The per-point arrays of an analysis, filled point by point (leading axis: point)."""
@@ -276,7 +315,23 @@ class _Results:
         shape = (len(setup.points), len(BODIES))
         n_lag, n_t = setup.lag.size, setup.time.size
         self.shape = shape
+        self.n_real = n_real
         self.scalars = {name: np.full(shape, np.nan) for name in SCALARS}
+        quantities = (*uncertainty.BODY_QUANTITIES, *uncertainty.POINT_QUANTITIES)
+        self.values = {
+            name: np.full(shape if name in uncertainty.BODY_QUANTITIES else shape[0], np.nan)
+            for name in quantities
+        }
+        self.each = {name: np.full((*v.shape, n_real), np.nan) for name, v in self.values.items()}
+        self.errors = {name: np.full(v.shape, np.nan) for name, v in self.values.items()}
+        self.counts = {
+            name: np.zeros((*shape, n_real), dtype=np.int64)
+            for name in ("go_events", "stop_events", "speed_samples", "labelled_samples")
+        }
+        n_factor = len(setup.factors)
+        self.interval_go = np.full((*shape, n_factor), np.nan)
+        self.interval_stop = np.full((*shape, n_factor), np.nan)
+        self.sums: dict[int, uncertainty.BodySums] = {}
         self.go_events = np.zeros(shape, dtype=np.int64)
         self.stop_events = np.zeros(shape, dtype=np.int64)
         self.msd = np.full((*shape, n_lag), np.nan)
@@ -288,7 +343,6 @@ class _Results:
         self.shifted_go = np.full((*shape, setup.shifts.size), np.nan)
         self.shifted_stop = np.full((*shape, setup.shifts.size), np.nan)
         self.ipr = np.full((len(setup.points), n_real, n_t), np.nan)
-        self.gc_distance = np.full(len(setup.points), np.nan)
         self.durations: dict[tuple[int, int, int], np.ndarray] = {}
         n_corr = setup.correlation_lags + 1
         self.vacf_sums = np.zeros((*shape, n_real, n_corr))
@@ -320,68 +374,141 @@ def _body_statistics(
     x: np.ndarray,
     y: np.ndarray,
     fine: tuple[np.ndarray, np.ndarray] | None,
+    record: tuple[np.ndarray, np.ndarray],
 ) -> None:
-    """Speeds, stop/go, MSD and fits of one body (positions x, y [realization, time], cm;
-    ``fine`` its fine record [realization, fine_time], if the MSD uses it) at point i, into
-    row (i, b) of ``res``."""
-    time, opts, plan, only = setup.time, setup.opts, setup.plan, setup.only
-    out = res.scalars
-    s = speed(x, y, time)
-    res.speeds[i, b] = s
+    """Speeds, stop/go, MSD and the per-realization sums of one body (positions x, y
+    [realization, time], cm; ``fine`` its fine record [realization, fine_time], if the MSD
+    uses it; ``record`` the positions its stop/go phases come from) at point i, into row
+    (i, b) of ``res``."""
+    time = setup.stopgo_time
+    s = speed(*record, time)
     lab = stopgo.label(setup.detector, s, time)
-    res.labels[i, b] = lab
-    _correlations(setup, res, i, b, x, y, lab)
-    d = stopgo.durations(lab, time, only)
-    for kind, values in ((stopgo.GO, d.go), (stopgo.STOP, d.stop)):
-        res.durations[(i, b, kind)] = values
-    res.go_events[i, b], res.stop_events[i, b] = d.go.size, d.stop.size
-    out["mean_go_duration"][i, b] = d.mean(stopgo.GO)
-    out["mean_stop_duration"][i, b] = d.mean(stopgo.STOP)
-    known = lab[lab >= 0]
-    out["go_fraction"][i, b] = (known == stopgo.GO).mean() if known.size else np.nan
-    for name, values in (("go", d.go), ("stop", d.stop)):
+    if setup.stopgo_index is None:
+        res.speeds[i, b], res.labels[i, b] = s, lab
+    else:
+        at, found = np.maximum(setup.stopgo_index, 0), setup.stopgo_index >= 0
+        res.speeds[i, b] = np.where(found, s[:, at], np.nan)
+        res.labels[i, b] = np.where(found, lab[:, at], -1)
+    _correlations(setup, res, i, b, x, y, res.labels[i, b])
+    only = setup.stopgo_only
+    each = [stopgo.durations(lab[r], time, only) for r in range(lab.shape[0])]
+    go = np.concatenate([d.go for d in each])
+    stop = np.concatenate([d.stop for d in each])
+    res.durations[(i, b, stopgo.GO)], res.durations[(i, b, stopgo.STOP)] = go, stop
+    res.go_events[i, b], res.stop_events[i, b] = go.size, stop.size
+    res.counts["go_events"][i, b] = [d.go.size for d in each]
+    res.counts["stop_events"][i, b] = [d.stop.size for d in each]
+    for name, values in (("go", go), ("stop", stop)):
         stat, p = stopgo.exponential_fit_statistic(values)
-        out[f"{name}_ks_statistic"][i, b], out[f"{name}_ks_pvalue"][i, b] = stat, p
+        res.scalars[f"{name}_ks_statistic"][i, b], res.scalars[f"{name}_ks_pvalue"][i, b] = stat, p
+    _systematics(setup, res, i, b, stopgo.Durations(go, stop), s, record)
+    seg = segments(time)[setup.stopgo_fine_segment]
+    part = s[:, seg.first : seg.last]
+    finite = np.isfinite(part)
+    known = lab >= 0
+    res.counts["speed_samples"][i, b] = finite.sum(axis=1)
+    res.counts["labelled_samples"][i, b] = known.sum(axis=1)
+
+    pooled, sem, pairs, msd_each = _ensemble_msd(setup.msd_plan, *(fine or (x, y)))
+    res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = (
+        pooled,
+        sem,
+        pairs,
+        msd_each,
+    )
+    with np.errstate(invalid="ignore", divide="ignore"):
+        vacf = np.where(
+            res.vacf_pairs[i, b] > 0, res.vacf_sums[i, b] / res.vacf_pairs[i, b], np.nan
+        )
+    t = res.turns[i, b]
+    res.sums[b] = uncertainty.BodySums(
+        go_sum=np.array([d.go.sum() for d in each]),
+        go_count=res.counts["go_events"][i, b].astype(np.float64),
+        go_square=np.array([(d.go**2).sum() for d in each]),
+        stop_sum=np.array([d.stop.sum() for d in each]),
+        stop_count=res.counts["stop_events"][i, b].astype(np.float64),
+        speed_sum=np.where(finite, part, 0.0).sum(axis=1),
+        speed_square=np.where(finite, part**2, 0.0).sum(axis=1),
+        speed_count=finite.sum(axis=1).astype(np.float64),
+        go_samples=(lab == stopgo.GO).sum(axis=1).astype(np.float64),
+        known_samples=known.sum(axis=1).astype(np.float64),
+        msd=msd_each,
+        lag=setup.lag,
+        correlation=vacf,
+        interval=setup.correlation_interval,
+        turn_cosine=t[:, 4],
+        turn_pairs=t[:, 3],
+    )
+
+
+def _systematics(
+    setup: _Setup,
+    res: _Results,
+    i: int,
+    b: int,
+    found: stopgo.Durations,
+    s: np.ndarray,
+    record: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """The mean durations of one body at point i with the threshold shifted and with the
+    speed measured over longer intervals (``found``: the durations as detected; ``s`` the
+    speeds of the stop/go record, ``record`` its positions)."""
+    time, only = setup.stopgo_time, setup.stopgo_only
     for k, det in enumerate(setup.shifted):
         if det is not None:
             dk = (
-                d
+                found
                 if setup.shifts[k] == 0
                 else stopgo.durations(stopgo.label(det, s, time), time, only)
             )
             res.shifted_go[i, b, k] = dk.mean(stopgo.GO)
             res.shifted_stop[i, b, k] = dk.mean(stopgo.STOP)
-    fine_speed = s[:, plan.fine.first : plan.fine.last]
-    finite = fine_speed[np.isfinite(fine_speed)]
-    out["mean_speed"][i, b] = finite.mean() if finite.size else np.nan
-    out["v0_hat"][i, b] = fits.v0_hat(fine_speed)
+    for k, f in enumerate(setup.factors):
+        dk = found
+        if f > 1:
+            tf = time[::f]
+            sf = speed(record[0][:, ::f], record[1][:, ::f], tf)
+            dk = stopgo.durations(stopgo.label(setup.detector, sf, tf), tf, None)
+        res.interval_go[i, b, k] = dk.mean(stopgo.GO)
+        res.interval_stop[i, b, k] = dk.mean(stopgo.STOP)
 
-    pooled, sem, pairs, each = _ensemble_msd(setup.msd_plan, *(fine or (x, y)))
-    lag = setup.lag
-    res.msd[i, b], res.msd_sem[i, b], res.msd_pairs[i, b], res.msd_each[i, b] = (
-        pooled,
-        sem,
-        pairs,
-        each,
+
+def _quantities(setup: _Setup, res: _Results, i: int, radius: float) -> None:
+    """Every quantity of point i with an error across realizations: its value, its value
+    per realization and its bootstrap standard error (module ``uncertainty``)."""
+    n = res.n_real
+    units = uncertainty.independent_count(n, setup.blocks)
+    rows = np.ones((1, n))
+    boot = uncertainty.weights(
+        n, setup.opts["resamples"], uncertainty.rng_for(setup.seed, i), setup.blocks
     )
-    tau_g = out["mean_go_duration"][i, b]
-    hi = opts["ballistic_window"] * tau_g
-    lo = opts["diffusive_window"] * tau_g
-    out["ballistic_window_end"][i, b], out["diffusive_window_start"][i, b] = hi, lo
-    if np.isfinite(tau_g):
-        v, v_err, _ = fits.ballistic_velocity(lag, pooled, hi)
-        slope, slope_err, _ = fits.msd_slope(lag, pooled, lo)
-        out["ballistic_velocity"][i, b], out["ballistic_velocity_error"][i, b] = v, v_err
-        out["msd_slope"][i, b], out["msd_slope_error"][i, b] = slope, slope_err
-        out["crossover_time"][i, b] = fits.crossover_time(v, slope)
-        out["confined_diffusion_coefficient"][i, b] = fits.confined_square_fit(
-            lag, pooled, opts["confined_side"], lo
-        )[0]
+    for b in range(len(BODIES)):
+        sums = res.sums[b]
+        value = uncertainty.estimates(sums, rows, setup.opts)
+        per = uncertainty.estimates(sums, np.eye(n), setup.opts)
+        samples = uncertainty.estimates(sums, boot, setup.opts) if units >= 2 else None
+        for name in uncertainty.BODY_QUANTITIES:
+            res.values[name][i, b] = value[name][0]
+            res.each[name][i, b] = per[name]
+            if samples is not None:
+                res.errors[name][i, b] = uncertainty.standard_error(samples[name], units)
+        tau_g = value["mean_go_duration"][0]
+        res.scalars["ballistic_window_end"][i, b] = setup.opts["ballistic_window"] * tau_g
+        res.scalars["diffusive_window_start"][i, b] = setup.opts["diffusive_window"] * tau_g
+    for name in ("ipr_mean", "gc_distance"):
+        each = res.each[name][i]
+        res.values[name][i] = uncertainty.mean_of(rows, each)[0]
+        if units >= 2:
+            res.errors[name][i] = uncertainty.standard_error(uncertainty.mean_of(boot, each), units)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        res.each["gc_distance_ratio"][i] = res.each["gc_distance"][i] / radius
+        res.values["gc_distance_ratio"][i] = res.values["gc_distance"][i] / radius
+        res.errors["gc_distance_ratio"][i] = res.errors["gc_distance"][i] / radius
 
 
-def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> None:
-    """Everything of point i (the Dataset ``sel``): both bodies, the shape index and the
-    bot-cell distance."""
+def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset, radius: float) -> None:
+    """Everything of point i (the Dataset ``sel``): both bodies, the shape index, the
+    bot-cell distance, and every quantity's error across realizations."""
     keep = setup.keep
     pos = {}
     for b, body in enumerate(BODIES):
@@ -390,13 +517,16 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
         pos[body] = (x, y)
         fine = None
         if setup.fine_keep is not None:
-            fine = tuple(
-                np.asarray(sel[f"{body}_{c}_fine"].transpose("realization", "fine_time").values)[
-                    :, setup.fine_keep
-                ]
-                for c in "xy"
+            fine = _fine_positions(sel, body, setup.fine_keep)
+        record = (x, y)
+        if setup.stopgo_keep is not None:
+            same = setup.fine_keep is not None and np.array_equal(
+                setup.fine_keep, setup.stopgo_keep
             )
-        _body_statistics(setup, res, i, b, x, y, fine)
+            record = (
+                fine if same and fine is not None else _fine_positions(sel, body, setup.stopgo_keep)
+            )
+        _body_statistics(setup, res, i, b, x, y, fine, record)
     mx = sel["membrane_x"].transpose("realization", "time", "node")
     my = sel["membrane_y"].transpose("realization", "time", "node")
     for r in range(res.ipr.shape[1]):
@@ -406,18 +536,25 @@ def _point_statistics(setup: _Setup, res: _Results, i: int, sel: xr.Dataset) -> 
             band_limited=setup.origin == "simulation",
         )
     (cx, cy), (bx, by) = pos["cell"], pos["bot"]
-    with np.errstate(invalid="ignore"):
-        res.gc_distance[i] = (
-            np.nanmean(np.hypot(bx - cx, by - cy)) if np.isfinite(bx - cx).any() else np.nan
-        )
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a realization with no sample: NaN
+        res.each["gc_distance"][i] = np.nanmean(np.hypot(bx - cx, by - cy), axis=1)
+        res.each["ipr_mean"][i] = np.nanmean(res.ipr[i], axis=1)
+    _quantities(setup, res, i, radius)
 
 
-def _pooled_statistics(
-    setup: _Setup, res: _Results, radius: np.ndarray
-) -> tuple[dict[str, Any], np.ndarray]:
+def _fine_positions(sel: xr.Dataset, body: str, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fine record of ``body`` (cm) [realization, kept fine sample]."""
+    return tuple(
+        np.asarray(sel[f"{body}_{c}_fine"].transpose("realization", "fine_time").values)[:, keep]
+        for c in "xy"
+    )
+
+
+def _pooled_statistics(setup: _Setup, res: _Results) -> tuple[dict[str, Any], np.ndarray]:
     """What needs every point: durations along ``event``, PDFs of t/<t> on common bins, the
-    theory, and the regime of each point. Returns every variable of the analysis by name, and
-    the edges of the PDF bins."""
+    theories, and the regime of each point. Returns every variable of the analysis by name,
+    and the edges of the PDF bins."""
     shape = res.shape
     n_event = max([v.size for v in res.durations.values()] + [0])
     durations = {kind: np.full((*shape, n_event), np.nan) for kind in (stopgo.GO, stopgo.STOP)}
@@ -431,14 +568,13 @@ def _pooled_statistics(
     for (i, b, kind), values in res.durations.items():
         pdfs[kind][i, b] = stopgo.scaled_pdf(values, edges)
 
-    v0_hat, tau_g = res.scalars["v0_hat"], res.scalars["mean_go_duration"]
+    v0_hat, tau_g = res.values["v0_hat"], res.values["mean_go_duration"]
     msd_theory = np.full(res.msd.shape, np.nan)
     for i, b in np.ndindex(*shape):
         if tau_g[i, b] > 0:
             msd_theory[i, b] = fits.run_and_tumble_msd(setup.lag, v0_hat[i, b], tau_g[i, b])
     opts = setup.opts
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = res.gc_distance / radius
+    ratio = res.values["gc_distance_ratio"]
     corr = _pooled_correlations(setup, res, durations[stopgo.GO])
     regime = np.full(len(setup.points), REGIMES["unknown"], dtype=np.int8)
     regime[ratio <= opts["coupled_below"]] = REGIMES["coupled"]
@@ -446,9 +582,24 @@ def _pooled_statistics(
         "intermediate"
     ]
     regime[ratio >= opts["decoupled_above"]] = REGIMES["decoupled"]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # a point with no membrane: NaN
-        ipr_mean = np.nanmean(res.ipr, axis=(1, 2))
+    quantities = {}
+    for name, value in res.values.items():
+        quantities[name] = value
+        quantities[f"{name}_realization"] = res.each[name]
+        quantities[f"{name}_error"] = res.errors[name]
+    with np.errstate(invalid="ignore"):
+        systematic = {
+            kind: np.fmax(
+                np.nanmax(np.abs(shifted - mean[..., None]), axis=-1, initial=0.0)
+                if np.isfinite(shifted).any()
+                else np.full(mean.shape, np.nan),
+                np.abs(interval[..., setup.factors.index(setup.frame_factor)] - mean),
+            )
+            for kind, shifted, interval, mean in (
+                ("go", res.shifted_go, res.interval_go, res.values["mean_go_duration"]),
+                ("stop", res.shifted_stop, res.interval_stop, res.values["mean_stop_duration"]),
+            )
+        }
     return {
         "msd": res.msd,
         "msd_sem": res.msd_sem,
@@ -463,40 +614,38 @@ def _pooled_statistics(
         "stop_pdf": pdfs[stopgo.STOP],
         "mean_go_duration_shifted": res.shifted_go,
         "mean_stop_duration_shifted": res.shifted_stop,
+        "mean_go_duration_interval": res.interval_go,
+        "mean_stop_duration_interval": res.interval_stop,
+        "mean_go_duration_systematic": systematic["go"],
+        "mean_stop_duration_systematic": systematic["stop"],
         **res.scalars,
+        **quantities,
         "go_events": res.go_events,
         "stop_events": res.stop_events,
-        "diffusion_coefficient": res.scalars["msd_slope"] / 4,
-        "msd_slope_theory": 2 * v0_hat**2 * tau_g,
+        **{f"{name}_realization": count for name, count in res.counts.items()},
         **corr,
         "ipr": res.ipr,
-        "ipr_mean": ipr_mean,
-        "gc_distance": res.gc_distance,
-        "gc_distance_ratio": ratio,
         "regime": regime,
     }, edges
 
 
 def _pooled_correlations(setup: _Setup, res: _Results, go: np.ndarray) -> dict[str, np.ndarray]:
     """The velocity autocorrelations (pooled, per realization, the renewal theory's), the
-    Green-Kubo D hat, the renewal theory's MSD curve and the go phases' turn statistics, by
-    variable name; ``go`` [point, body, event] the pooled go durations (s)."""
+    renewal theory's MSD curve and the go phases' turn statistics, by variable name; ``go``
+    [point, body, event] the pooled go durations (s)."""
     dt, k = setup.correlation_interval, setup.correlation_lags
-    v0_hat = res.scalars["v0_hat"]
+    v0_hat = res.values["v0_hat"]
     with np.errstate(invalid="ignore", divide="ignore"):
         total = res.vacf_pairs.sum(axis=2)
         pooled = np.where(total > 0, res.vacf_sums.sum(axis=2) / total, np.nan)
         each = np.where(res.vacf_pairs > 0, res.vacf_sums / res.vacf_pairs, np.nan)
         t = res.turns
         sums = t.sum(axis=2)
-        cosine = sums[..., 4] / sums[..., 3]
         cosine_each = np.where(t[..., 3] > 0, t[..., 4] / t[..., 3], np.nan)
         length, square = sums[..., 1] / sums[..., 0], sums[..., 2] / sums[..., 0]
     theory_msd = np.full(res.msd.shape, np.nan)
     theory_vacf = np.full(pooled.shape, np.nan)
-    slope = np.full(res.shape, np.nan)
     for i, b in np.ndindex(*res.shape):
-        slope[i, b] = correlation.green_kubo_slope(pooled[i, b], dt)
         if np.isfinite(v0_hat[i, b]):
             theory_msd[i, b] = correlation.renewal_msd(setup.lag, v0_hat[i, b], go[i, b])
             theory_vacf[i, b] = correlation.renewal_autocorrelation(dt, k, v0_hat[i, b], go[i, b])
@@ -505,8 +654,6 @@ def _pooled_correlations(setup: _Setup, res: _Results, go: np.ndarray) -> dict[s
         "velocity_autocorrelation": pooled,
         "velocity_autocorrelation_realization": each,
         "velocity_autocorrelation_renewal": theory_vacf,
-        "green_kubo_slope": slope,
-        "go_turn_cosine": cosine,
         "go_turn_cosine_realization": cosine_each,
         "go_turn_pairs": t[..., 3].astype(np.int64),
         "go_displacement_mean": length,
@@ -575,6 +722,14 @@ def _analysis_dataset(
                 setup.shifts,
                 {"units": "cm s-1", "long_name": "shift of the stop/go threshold"},
             ),
+            "detection_interval": (
+                "detection_interval",
+                setup.detection_interval,
+                {
+                    "units": "s",
+                    "long_name": "interval over which the speed is measured for stop/go",
+                },
+            ),
             "correlation_lag": (
                 "correlation_lag",
                 setup.correlation_interval * np.arange(setup.correlation_lags + 1),
@@ -591,11 +746,12 @@ def _analysis_dataset(
     for name, coord in ds.coords.items():  # e.g. duration along radius
         if name not in lead and coord.dims and set(coord.dims) <= set(lead):
             out.coords[name] = (coord.dims, coord.values, dict(coord.attrs))
+    variables = {}
     for name, spec in ANALYSIS_VARIABLES.items():
         dims = tuple(lead) + tuple(d for d in spec.dims if d != SWEEP)
         data = np.asarray(values[name])
-        out[name] = (dims, data.reshape(lead_shape + data.shape[1:]), spec.cf_attrs())
-    return out
+        variables[name] = (dims, data.reshape(lead_shape + data.shape[1:]), spec.cf_attrs())
+    return out.assign(variables)
 
 
 def _collapse_variables(
@@ -637,12 +793,33 @@ def _collapse_variables(
     )
 
 
+def _independent(setup: _Setup, blocks: np.ndarray | None, n_real: int) -> int:
+    """Set the blocks of the realizations on ``setup`` and return the number of independent
+    units among them, with a warning when there are fewer than two."""
+    setup.blocks = None if blocks is None else np.asarray(blocks)
+    if setup.blocks is not None and setup.blocks.shape != (n_real,):
+        raise ConfigError(
+            f"analyze: blocks has shape {setup.blocks.shape}, not one block per realization "
+            f"({n_real},)"
+        )
+    units = uncertainty.independent_count(n_real, setup.blocks)
+    if units < 2:
+        warnings.warn(
+            f"{units} independent realization: no error across realizations exists, so every "
+            "_error variable is NaN (analyse two or more realizations for errors)",
+            AnalysisWarning,
+            stacklevel=3,
+        )
+    return units
+
+
 def analyze(
     ds: xr.Dataset,
     options: Mapping[str, Any] | None = None,
     *,
     progress: bool = False,
     registry: Registry | None = None,
+    blocks: np.ndarray | None = None,
 ) -> xr.Dataset:
     """Analyse a simulation or tracked Dataset (docs/model.md §6).
 
@@ -661,6 +838,10 @@ def analyze(
     registry : Registry, optional
         Where the stop/go detector is looked up; by default the built-ins and the installed
         plugins (``softcell.core.components.registry.default_registry()``).
+    blocks : array of int, optional
+        The block of each realization when realizations are not independent of each other
+        (the cells of one assembly, analysed as realizations): the bootstrap behind every
+        ``_error`` draws whole blocks. Default: every realization its own block.
 
     Returns
     -------
@@ -668,7 +849,10 @@ def analyze(
         The analysis (``softcell.core.schema.ANALYSIS_VARIABLES``; an assembly's with a
         ``cell`` dim on the per-cell variables and ``softcell.core.schema.CROWD_VARIABLES``),
         with CF attributes on every variable and the options, the input's parameters, seed and
-        components in the global attributes.
+        components in the global attributes. Every quantity with an error has its value per
+        realization (``NAME_realization``) and its standard error across realizations
+        (``NAME_error``, a bootstrap over realizations; NaN, with an
+        :class:`~softcell.errors.AnalysisWarning`, for one realization).
 
     Raises
     ------
@@ -691,14 +875,20 @@ def analyze(
         return crowd.analyze_assembly(ds, options, collective, progress=progress, registry=registry)
     crowd.refuse_for_one_cell(collective)
     setup = _Setup(ds, options, registry if registry is not None else default_registry())
-    res = _Results(setup, ds.sizes["realization"])
+    n_real = ds.sizes["realization"]
+    units = _independent(setup, blocks, n_real)
+    res = _Results(setup, n_real)
     radius = np.array([_radius(ds, p) for p in setup.points])
     for i, point in enumerate(
         tqdm(setup.points, disable=not progress, desc="analysis", unit="point")
     ):
-        _point_statistics(setup, res, i, ds.isel(point) if point else ds)
-    values, edges = _pooled_statistics(setup, res, radius)
+        _point_statistics(setup, res, i, ds.isel(point) if point else ds, radius[i])
+    values, edges = _pooled_statistics(setup, res)
     out = _analysis_dataset(ds, setup, values, edges)
+    described = uncertainty.describe(units, setup.opts["resamples"], setup.blocks is not None)
+    for name in out.data_vars:
+        if str(name).endswith("_error"):
+            out[name].attrs["uncertainty"] = described
     if "radius" in setup.lead and len(setup.lead) == 1:
         _collapse_variables(out, setup, values, radius)
     opts = setup.opts
