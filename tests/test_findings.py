@@ -75,3 +75,69 @@ def test_a_miss_must_state_its_cause():
         Finding("t", "p", "m", "differs", "r")
     with pytest.raises(ValueError, match="is not one of"):
         Finding("t", "p", "m", "fine", "r", cause="x")
+
+
+def _collapsing_sweep(a: float, b: float, seed: int = 0):
+    """A sweep whose decoupled cell MSDs collapse exactly with MSD R^a against lag R^b
+    (curves R^-a f(lag R^b), f a run-and-tumble MSD), its resamples 1 % apart."""
+    from types import SimpleNamespace
+
+    import xarray as xr
+
+    from softcell.core.analysis.fits import run_and_tumble_msd
+
+    radii = np.array([6.0, 8.0, 10.0, 12.0])
+    lag = np.logspace(-2, 2, 81)
+    msd = np.array([r**-a * run_and_tumble_msd(lag * r**b, 1.0, 0.4) for r in radii])
+    rng = np.random.default_rng(seed)
+    samples = msd[:, None, :] * np.exp(rng.normal(0, 0.01, (radii.size, 100, 1)))
+    analysis = xr.Dataset(
+        {
+            "msd": (("radius", "body", "lag"), np.stack([msd, msd], axis=1)),
+            "diffusive_window_start": (("radius", "body"), np.full((radii.size, 2), 30.0)),
+            "regime": ("radius", np.full(radii.size, 2)),
+        },
+        coords={"radius": radii, "body": ["cell", "bot"], "lag": lag},
+    )
+    return SimpleNamespace(
+        analysis=analysis,
+        estimates={"msd_samples": samples},
+        radii=radii,
+        regime=np.full(radii.size, 2),
+    )
+
+
+def test_the_collapse_rule_agrees_with_the_paper_s_pair_and_can_fail():
+    from softcell.workflows.findings import _collapse_findings
+
+    (paper,) = _collapse_findings(_collapsing_sweep(1 / 3, -1.0))
+    assert paper.verdict == "agrees", paper.measured
+    assert paper.values["a"] == pytest.approx(1 / 3, abs=0.02)
+    (other,) = _collapse_findings(_collapsing_sweep(2.5, -0.25))
+    assert other.verdict == "differs", other.measured
+    assert other.values["a"] == pytest.approx(2.5, abs=0.05)
+    assert other.values["a_minus_2b"] == pytest.approx(3.0, abs=0.05)
+
+
+def test_the_free_bot_is_measured_as_the_paper_measured_it():
+    import xarray as xr
+
+    from softcell.core.analysis.fits import run_and_tumble_msd
+    from softcell.workflows.findings import free_bot_measures
+
+    lag = np.logspace(-2, 2.5, 91)
+    v0, tau = 10.0, 0.5  # RMS speed (cm/s), mean go time (s)
+    rng = np.random.default_rng(2)
+    each = run_and_tumble_msd(lag, v0, tau) * np.exp(rng.normal(0, 0.02, (6, 1)))
+    free = xr.Dataset(
+        {"msd_realization": (("body", "realization", "lag"), np.stack([each, each]))},
+        coords={"body": ["cell", "bot"], "lag": lag},
+    )
+    found = free_bot_measures(free, seed=0)
+    d = 2 * v0**2 * tau / 4  # MSD -> 4 D tau
+    assert found["D_b"][0] == pytest.approx(d, rel=0.03)
+    # Over lags <= 0.1 s the curve bends below v0^2 tau^2 by ~tau / (3 <tau_g>): a few %.
+    assert found["v_bot"][0] == pytest.approx(v0, rel=0.04)
+    assert found["tau_bot"][0] == pytest.approx(found["D_b"][0] / found["v_bot"][0])
+    # Six realizations that differ by a common factor: the errors are that factor's spread.
+    assert 0 < found["D_b"][1] < 0.05 * d

@@ -129,7 +129,7 @@ def _filmed_span(simulated: xr.Dataset, start: float, end: float) -> xr.Dataset:
     if "fine_time" in simulated.dims:
         cut["fine_time"] = slice(start - 1e-9, end + 1e-9)
     span = simulated.sel(cut)
-    t0 = span["time"][0]
+    t0 = float(span["time"].values[0])
     span = span.assign_coords(time=span["time"] - t0)
     span["time"].attrs.update(simulated["time"].attrs)
     if "fine_time" in span.dims:

@@ -226,6 +226,7 @@ def _trend_finding(
         f"{r:g}: {_pm(v, e)}" for r, v, e in zip(radii, est.value, est.error, strict=True)
     )
     measured = f"{listed} {unit}; Kendall tau = {tau:+.2f} (exact one-sided p = {p:.2g})"
+    measured += _systematic(sweep, name)
     if against:
         measured += "; against the trend beyond noise: " + "; ".join(against)
     if not np.isfinite(tau):
@@ -248,6 +249,22 @@ def _trend_finding(
         uncertainties={"radius": None, name: _numbers(est.error)},
         unit={"radius": "cm", name: unit},
         cause=cause,
+    )
+
+
+def _systematic(sweep: _Sweep, name: str) -> str:
+    """The detector's systematic of a mean duration over R, as a clause ('' for another
+    quantity or an analysis without it)."""
+    key = f"{name}_systematic"
+    if key not in sweep.analysis:
+        return ""
+    values = cell_values(sweep.analysis, key)
+    if not np.isfinite(values).any():
+        return ""
+    return (
+        f"; the detector's systematic (threshold moved by the analysis' threshold_shift, or "
+        f"the speed measured every ~1/30 s): {np.nanmin(values):.2g}-{np.nanmax(values):.2g} s"
+        " over R, beside the statistical errors above"
     )
 
 
@@ -302,7 +319,8 @@ def _go_duration_finding(sweep: _Sweep) -> Finding:
         "grows beyond the coupled state, longest in the intermediate regime, saturates in "
         "the decoupled regime",
         f"{listed} s; largest at R = {radii[peak]:g} cm ({REGIME_NAMES[regime[peak]]}); "
-        f"spread over the decoupled radii {spread:.1%} of their mean",
+        f"spread over the decoupled radii {spread:.1%} of their mean"
+        + _systematic(sweep, "mean_go_duration"),
         verdict,
         rule,
         values,
