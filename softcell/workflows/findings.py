@@ -1063,13 +1063,23 @@ def _renewal_d(free: xr.Dataset) -> float:
     return float(renewal_diffusion(params, "inner" if protocol == "pivot_run_and_tumble" else None))
 
 
-def _free_bot_cause(within: dict[str, bool], renewal: dict[str, float]) -> str:
-    """Which of the free bot's numbers miss, and how much of the gap in D a pivot closes."""
+def _free_bot_cause(
+    within: dict[str, bool], renewal: dict[str, float], free: xr.Dataset, v_bot: float
+) -> str:
+    """Which of the free bot's numbers miss, what the fitted speed is, and how much of the gap
+    in D a pivot closes."""
     off = [q for q, ok in within.items() if not ok]
     gap = PAPER_FREE_BOT["D_b"][0]
+    params = json.loads(free.attrs["softcell_parameters"])
+    run = float(params["drive_force"]) / float(params["bot_friction"])
     parts = [
         f"{', '.join(off)} off beyond {NOISE:g} combined errors with the model's tumble "
-        "about the bot's centre (the paper's SI); the robot tumbles about a pivot"
+        "about the bot's centre (the paper's SI). The fit over short lags measures the root "
+        f"mean square speed of runs and tumbles together ({v_bot:.3g} cm/s); the run speed "
+        f"F0 / gamma_T is {run:.3g} cm/s, the paper's v_bot: a tumble about the centre is at "
+        "rest, so the fitted speed is the run speed times the square root of the fraction "
+        "of time running, and tau_bot = D_b / v_bot is longer by as much. The robot tumbles "
+        "about a pivot, which keeps it moving"
     ]
     for variant, d in renewal.items():
         if variant != "centre":
@@ -1102,7 +1112,11 @@ def _free_bot_findings(sweep: _Sweep) -> list[Finding]:
         + f" (renewal theory's D: {renewal[variant]:.2f})"
         for variant, values in measured.items()
     )
-    cause = "" if verdict == "agrees" else _free_bot_cause(within, renewal)
+    cause = (
+        ""
+        if verdict == "agrees"
+        else _free_bot_cause(within, renewal, sweep.free_bot, measured["centre"]["v_bot"][0])
+    )
     values: dict[str, Any] = {}
     errors: dict[str, Any] = {}
     for variant, numbers in measured.items():
