@@ -62,6 +62,7 @@ def stop_and_go_dataset(
     nodes: int = 16,
     offset: Sequence[float] = (0.0, 0.0),
     turn: float | None = None,
+    fine: bool = False,
 ) -> xr.Dataset:
     """A simulation-schema Dataset whose cell follows ``stop_and_go_path``: a stationary
     stop-and-go path with exponential durations, each go phase in a new direction.
@@ -89,24 +90,47 @@ def stop_and_go_dataset(
     turn : float, optional
         Angle (rad): each go phase turns by +-``turn`` from the previous one instead of
         heading anywhere (mean cosine between consecutive go phases: cos(turn)).
+    fine : bool
+        Also store the bodies' fine record, as a simulation does: the paths every finest
+        interval of ``times`` over the whole span (``times`` must lie on that grid).
 
     Returns
     -------
     xarray.Dataset
-        The simulation schema; no fine record (the MSD uses the two-rate samples).
+        The simulation schema; with ``fine``, the bodies' fine record too.
     """
     times = np.asarray(times, dtype=np.float64)
+    grid = times
+    if fine:
+        step = float(np.min(np.diff(times)))
+        grid = times[0] + step * np.arange(int(round((times[-1] - times[0]) / step)) + 1)
+        at = np.rint((times - times[0]) / step).astype(np.int64)
+        if not np.allclose(grid[at], times, rtol=0, atol=1e-6 * step):
+            raise ValueError("fine=True needs sample times on the grid of the finest interval")
     paths = [
-        stop_and_go_path(rng, times, speed, mean_go, mean_stop, turn) for _ in range(realizations)
+        stop_and_go_path(rng, grid, speed, mean_go, mean_stop, turn) for _ in range(realizations)
     ]
-    cx = np.array([p[0] for p in paths]) + offset[0]
-    cy = np.array([p[1] for p in paths]) + offset[1]
+    fx = np.array([p[0] for p in paths]) + offset[0]
+    fy = np.array([p[1] for p in paths]) + offset[1]
+    cx, cy = (fx[:, at], fy[:, at]) if fine else (fx, fy)
     angle = np.linspace(0, 2 * np.pi, nodes, endpoint=False)
     mx = cx[..., None] + radius * np.cos(angle)
     my = cy[..., None] + radius * np.sin(angle)
     turn = times[None, :] + np.zeros((realizations, 1))
     bx = cx + bot_offset * np.cos(turn)
     by = cy + bot_offset * np.sin(turn)
+    record = None
+    if fine:
+        heading = grid[None, :] + np.zeros((realizations, 1))
+        record = {
+            "fine_time": grid,
+            "cell_x_fine": fx,
+            "cell_y_fine": fy,
+            "bot_x_fine": fx + bot_offset * np.cos(heading),
+            "bot_y_fine": fy + bot_offset * np.sin(heading),
+            "bot_angle_fine": heading,
+            "bot_phase_fine": np.ones(fx.shape, dtype=np.int8),
+        }
     return simulation_dataset(
         times,
         np.arange(realizations),
@@ -121,6 +145,7 @@ def stop_and_go_dataset(
         parameters=Parameters({"radius": radius}),
         seed=0,
         components={"synthetic": "stop_and_go_dataset"},
+        fine=record,
     )
 
 
