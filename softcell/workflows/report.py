@@ -63,6 +63,7 @@ def _fmt(x: float, digits: int = 3) -> str:
 
 
 def _per_radius(analysis: xr.Dataset) -> Block:
+    """The cell's numbers per radius, each ± its standard error across realizations."""
     header = [
         "R (cm)",
         "regime",
@@ -71,27 +72,34 @@ def _per_radius(analysis: xr.Dataset) -> Block:
         "<tau_s> (s)",
         "ballistic v (cm/s)",
         "v0 hat (cm/s)",
-        "D hat fit (cm2/s)",
+        "D hat, affine fit (cm2/s)",
         "D hat theory (cm2/s)",
         "go phases",
         "shape index P/sqrt(A)",
     ]
     rows = []
     for i, r in enumerate(analysis["radius"].values):
-        a = analysis.isel(radius=i).sel(body="cell")
+        point = analysis.isel(radius=i)
+        a = point.sel(body="cell")
+
+        def pm(source: xr.Dataset, name: str, digits: int = 3) -> str:
+            value, error = float(source[name]), float(source[f"{name}_error"])
+            text = _fmt(value, digits)
+            return text if not np.isfinite(error) else f"{text} ± {error:.2g}"
+
         rows.append(
             [
                 f"{r:g}",
                 REGIME_NAMES[int(analysis["regime"].values[i])],
-                _fmt(float(analysis["gc_distance_ratio"].values[i]), 2),
-                _fmt(float(a.mean_go_duration)),
-                _fmt(float(a.mean_stop_duration)),
-                _fmt(float(a.ballistic_velocity)),
-                _fmt(float(a.v0_hat)),
-                _fmt(float(a.msd_slope)),
-                _fmt(float(a.msd_slope_theory)),
+                pm(point, "gc_distance_ratio", 2),
+                pm(a, "mean_go_duration"),
+                pm(a, "mean_stop_duration"),
+                pm(a, "ballistic_velocity"),
+                pm(a, "v0_hat"),
+                pm(a, "msd_slope_affine"),
+                pm(a, "msd_slope_theory"),
                 str(int(a.go_events)),
-                _fmt(float(analysis["ipr_mean"].values[i]), 4),
+                pm(point, "ipr_mean", 4),
             ]
         )
     return Block("table", (header, rows))
@@ -269,7 +277,8 @@ def write_report(
         _per_radius(analysis),
         Block(
             "p",
-            "The shape index is the membrane's perimeter over the square root of its area, "
+            "Errors are standard errors across realizations (a bootstrap over them). The "
+            "shape index is the membrane's perimeter over the square root of its area, "
             "averaged over samples and realizations: 2 sqrt(pi) = 3.545 for a circle, larger "
             "the more the membrane departs from one (the paper's IPR).",
         ),
