@@ -838,7 +838,7 @@ def analyze(
     registry : Registry, optional
         Where the stop/go detector is looked up; by default the built-ins and the installed
         plugins (``softcell.core.components.registry.default_registry()``).
-    blocks : array of int, optional
+    blocks : sequence of int, optional
         The block of each realization when realizations are not independent of each other
         (the cells of one assembly, analysed as realizations): the bootstrap behind every
         ``_error`` draws whole blocks. Default: every realization its own block.
