@@ -16,8 +16,8 @@ import numpy as np
 
 
 def rows() -> list[dict[str, object]]:
-    from softcell.core.analysis import analyze
-    from softcell.core.analysis.msd import msd
+    from softcell.analysis import analyze
+    from softcell.analysis.msd import msd
     from softcell.testing.synthetic import stop_and_go_dataset, two_rate_times
 
     rng = np.random.default_rng(0)

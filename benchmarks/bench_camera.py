@@ -1,6 +1,6 @@
 """Camera footage: accuracy per effect, and frames per second end to end.
 
-Accuracy: a simulated cell (R = 8 cm, 2 s) filmed by ``softcell.testing.camera`` (a ray
+Accuracy: a simulated cell (R = 8 cm, 2 s) filmed by ``softcell.testing.footage`` (a ray
 caster sharing nothing with the renderer: 1024^2 px, ~10 px/cm, the camera 150 cm above an
 80 cm plate), one effect at a time, 31 frames each, with a 3 mm and the paper's 0.1 mm wall,
 then every effect together over 61 frames; tracked calibrated from the plate (with the camera
@@ -41,7 +41,7 @@ EFFECTS = {
 
 
 def accuracy(tracked, footage) -> tuple[float, float, float, float]:
-    from softcell.io.video import FLAGS
+    from softcell.video.track import FLAGS
 
     t = tracked.isel(realization=0)
     ok = t.tracking_flag.values == FLAGS["ok"]
@@ -52,8 +52,8 @@ def accuracy(tracked, footage) -> tuple[float, float, float, float]:
 
 
 def accuracy_rows(sim, tmp: Path) -> list[dict[str, object]]:
-    from softcell.io.video import track
-    from softcell.testing.camera import Scene, every_effect, film
+    from softcell.testing.footage import Scene, every_effect, film
+    from softcell.video.track import track
 
     rows = []
     cases = [
@@ -131,10 +131,10 @@ def decode_rate(path: Path, threads: int) -> float:
 def speed_rows(sim, tmp: Path) -> list[dict[str, object]]:
     import cv2
 
-    from softcell.core.camera import calibrate_from_plate
-    from softcell.core.tracking import Tracker
-    from softcell.io.video import track
-    from softcell.testing.camera import Scene, film
+    from softcell.testing.footage import Scene, film
+    from softcell.video.calibration import calibrate_from_plate
+    from softcell.video.track import track
+    from softcell.video.tracker import Tracker
 
     scene = replace(Scene(), tilt=(2.0, -2.2), k1=-0.1, noise=4.0)
     footage = film(sim, tmp / "noisy.mkv", scene, offset=OFFSET, end=1.0)
@@ -197,9 +197,9 @@ def speed_rows(sim, tmp: Path) -> list[dict[str, object]]:
 
 
 def rows() -> list[dict[str, object]]:
-    from softcell.core.runconfig import RunConfig
     from softcell.io.netcdf import read_dataset
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

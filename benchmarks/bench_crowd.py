@@ -24,9 +24,9 @@ FRACTION = 0.35
 
 
 def _built(duration: float):
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine import build_integrator, build_model
-    from softcell.core.params import Parameters
+    from softcell.components.registry import default_registry
+    from softcell.engine import build_integrator, build_model
+    from softcell.model.parameters import Parameters
 
     registry = default_registry()
     params = Parameters(
@@ -50,8 +50,8 @@ def _crowd(cells: int, duration: float, seed: int = 0) -> tuple[float, object]:
 
 
 def _crowd_run(cells: int, duration: float, seed: int = 0):
-    from softcell.core.assembly import Assembly, Domain, place_cells
-    from softcell.core.crowd import cell_rngs, crowd_dataset, placement_rng, run_assembly
+    from softcell.engine.groups import cell_rngs, crowd_dataset, placement_rng, run_assembly
+    from softcell.model.assembly import Assembly, Domain, place_cells
 
     model, stepper = _built(duration)
     box = math.sqrt(cells * math.pi * RADIUS**2 / FRACTION)
@@ -82,9 +82,9 @@ def _analysis(dataset) -> float:
 
 def _overhead(duration: float = 60.0, rounds: int = 3) -> float:
     """Median wall time of the one-cell assembly over the single-cell run's."""
-    from softcell.core.assembly import Domain
-    from softcell.core.crowd import cell_rngs, run_assembly
-    from softcell.core.realization import realization_rng, run_realization
+    from softcell.engine.cell import realization_rng, run_realization
+    from softcell.engine.groups import cell_rngs, run_assembly
+    from softcell.model.assembly import Domain
 
     model, stepper = _built(duration)
     _, single = _built(duration)

@@ -29,10 +29,10 @@ def explicit_step(
 ) -> dict[str, float]:
     """Time one explicit Euler ``advance`` of ``span`` s after ``warmup`` s; return us per
     step and simulated seconds per wall second."""
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.params import Parameters
-    from softcell.core.realization import realization_rng
+    from softcell.components.registry import default_registry
+    from softcell.engine import build_integrator, build_model, initial_state
+    from softcell.engine.cell import realization_rng
+    from softcell.model.parameters import Parameters
 
     params = Parameters({"radius": radius, "duration": warmup + span})
     model = build_model(

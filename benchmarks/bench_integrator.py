@@ -35,9 +35,9 @@ FAST_REPEATS = 7
 
 def explicit_rate(radius: float) -> float:
     """Simulated seconds per wall second of explicit_euler over [0, EXPLICIT_SPAN] s."""
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.realization import realization_rng
+    from softcell.components.registry import default_registry
+    from softcell.engine import build_integrator, build_model, initial_state
+    from softcell.engine.cell import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
     params = parameters(radius, EXPLICIT_SPAN)
@@ -52,7 +52,7 @@ def explicit_rate(radius: float) -> float:
 
 
 def fast_run(radius: float, reference) -> dict[str, float]:
-    from softcell.core.engine import Record
+    from softcell.engine import Record
     from softcell.testing.compare import coarse_statistics, parameters, path_difference, run
 
     key = f"r{radius:g}"

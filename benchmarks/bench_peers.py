@@ -46,9 +46,9 @@ class Case:
     compiled right-hand side and Jacobian as Python callables."""
 
     def __init__(self, radius: float, reference) -> None:
-        from softcell.core.components.registry import default_registry
-        from softcell.core.engine import Record, build_integrator, build_model, initial_state
-        from softcell.core.realization import realization_rng
+        from softcell.components.registry import default_registry
+        from softcell.engine import Record, build_integrator, build_model, initial_state
+        from softcell.engine.cell import realization_rng
         from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
         self.radius = radius
@@ -64,7 +64,7 @@ class Case:
         modes, pose, self.schedule = initial_state(
             self.model, realization_rng(int(reference["seed"]), 0, 0)
         )
-        from softcell.plugins.rodas4 import pack
+        from softcell.integrators.rodas4 import pack
 
         self.u0 = pack(modes, pose)
         self.m = 2 * self.model.cutoff + 1
@@ -81,7 +81,7 @@ class Case:
 
     def error(self, samples: np.ndarray) -> float:
         """Largest bot or cell path difference (cm) from the explicit reference."""
-        from softcell.core.engine import Record
+        from softcell.engine import Record
         from softcell.testing.compare import path_difference
 
         modes = samples[:, : self.m] + 1j * samples[:, self.m : 2 * self.m]
@@ -163,8 +163,8 @@ def run_peer(case: Case, method: str, tol: float, max_step: float) -> tuple[floa
 def run_rodas4(case: Case, tol: float | None) -> tuple[float, float, int]:
     """(wall s, path error cm, right-hand-side calls) of rodas4 at rtol = atol = tol (its
     defaults when None)."""
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine import build_integrator
+    from softcell.components.registry import default_registry
+    from softcell.engine import build_integrator
 
     extra = {} if tol is None else {"atol": tol, "rtol": tol}
     params = case.params.replace(**extra)

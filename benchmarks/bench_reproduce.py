@@ -38,8 +38,8 @@ MEASURED = Path(__file__).resolve().parents[1] / "docs" / "results" / "full" / "
 def ensemble_rate(out: Path, workers: int, client=None) -> float:
     """Simulated seconds per wall second of the whole ensemble on ``workers`` processes (or on
     the workers of ``client``)."""
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     config = RunConfig(parameters=dict(ENSEMBLE))
     start = time.perf_counter()
@@ -58,9 +58,9 @@ def ensemble_rate(out: Path, workers: int, client=None) -> float:
 def warm_cluster_rate(tmp: Path) -> float:
     """The ensemble's rate on ``CORES`` workers that have already imported softcell and loaded
     the compiled model: what a long ensemble tends to, its start-up spread thin."""
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.cluster import cluster_client
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.cluster import cluster_client
+    from softcell.runner.ensemble import simulate
 
     with cluster_client(CORES) as client:
         simulate(
@@ -77,8 +77,8 @@ def warm_cluster_rate(tmp: Path) -> float:
 PLAIN = """
 import sys, time
 from pathlib import Path
-from softcell.core.runconfig import RunConfig
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
 out = Path(sys.argv[1])
 simulate(RunConfig(parameters={"radius": 9.0, "duration": 0.1}), out / "warm", progress=False)
 start = time.perf_counter()
@@ -121,8 +121,8 @@ def ceiling_rows(tmp: Path) -> list[dict[str, object]]:
 
 
 def ensemble_rows(tmp: Path) -> list[dict[str, object]]:
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     simulate(
         RunConfig(parameters={"radius": 6.0, "duration": 0.1}), tmp / "warm", progress=False
@@ -192,7 +192,7 @@ def measured_rows() -> list[dict[str, object]]:
 
 
 def rows() -> list[dict[str, object]]:
-    from softcell.workflows.reproduce import QUICK, reproduce
+    from softcell.paper.reproduce import QUICK, reproduce
 
     with tempfile.TemporaryDirectory() as tmp:
         out = ensemble_rows(Path(tmp)) + ceiling_rows(Path(tmp))

@@ -17,9 +17,9 @@ DURATION = 60.0
 
 
 def _built(protocol: str):
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine import build_integrator, build_model
-    from softcell.core.params import Parameters
+    from softcell.components.registry import default_registry
+    from softcell.engine import build_integrator, build_model
+    from softcell.model.parameters import Parameters
 
     registry = default_registry()
     params = Parameters({"radius": 5.0, "duration": DURATION}, registry.parameter_specs().values())
@@ -28,7 +28,7 @@ def _built(protocol: str):
 
 
 def _wall(model, stepper) -> float:
-    from softcell.core.realization import realization_rng, run_realization
+    from softcell.engine.cell import realization_rng, run_realization
 
     start = time.perf_counter()
     run_realization(model, stepper, realization_rng(0, 0, 0))

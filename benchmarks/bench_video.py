@@ -19,12 +19,12 @@ IN_MEMORY = 150
 def rows() -> list[dict[str, object]]:
     import cv2
 
-    from softcell.core.runconfig import RunConfig
-    from softcell.core.tracking import Tracker
     from softcell.io.netcdf import read_dataset
-    from softcell.io.render import render
-    from softcell.io.video import track
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
+    from softcell.video.render import render
+    from softcell.video.track import track
+    from softcell.video.tracker import Tracker
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

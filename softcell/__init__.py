@@ -10,25 +10,25 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from softcell._version import __version__
-from softcell.config import use_module_store
-from softcell.core.components.hookspecs import hookimpl
-from softcell.core.params import Parameters
+from softcell.components.hookspecs import hookimpl
 from softcell.errors import ConfigError, ParameterError, SchemaError, SoftcellError
 from softcell.io.model_cache import DiskStore
+from softcell.model.parameters import Parameters
+from softcell.settings import use_module_store
 
 # The composed models are kept in the disk cache (core, which writes no file, is handed it).
 use_module_store(DiskStore())
 
 if TYPE_CHECKING:
-    from softcell.core.analysis import analyze
-    from softcell.core.runconfig import RunConfig
-    from softcell.core.schema import validate
-    from softcell.io.figures import make_figures
+    from softcell.analysis import analyze
     from softcell.io.netcdf import open_dataset, read_dataset, write_dataset
-    from softcell.io.render import render
-    from softcell.io.video import track
-    from softcell.workflows.ensemble import simulate
-    from softcell.workflows.reproduce import reproduce
+    from softcell.model.configuration import RunConfig
+    from softcell.paper.figures import make_figures
+    from softcell.paper.reproduce import reproduce
+    from softcell.runner.ensemble import simulate
+    from softcell.schema import validate
+    from softcell.video.render import render
+    from softcell.video.track import track
 
 __all__ = [
     "ConfigError",
@@ -55,18 +55,18 @@ _LAZY = {
     "open_dataset": "softcell.io.netcdf",
     "read_dataset": "softcell.io.netcdf",
     "write_dataset": "softcell.io.netcdf",
-    "validate": "softcell.core.schema",
-    "analyze": "softcell.core.analysis",
-    "simulate": "softcell.workflows.ensemble",
-    "RunConfig": "softcell.core.runconfig",
-    "reproduce": "softcell.workflows.reproduce",
-    "make_figures": "softcell.io.figures",
-    "render": "softcell.io.render",
-    "track": "softcell.io.video",
+    "validate": "softcell.schema",
+    "analyze": "softcell.analysis",
+    "simulate": "softcell.runner.ensemble",
+    "RunConfig": "softcell.model.configuration",
+    "reproduce": "softcell.paper.reproduce",
+    "make_figures": "softcell.paper.figures",
+    "render": "softcell.video.render",
+    "track": "softcell.video.track",
 }
 
 if "xarray" in __import__("sys").modules:  # register ds.softcell now; else when softcell
-    import softcell.core.analysis.accessor  # noqa: F401  first opens or writes a Dataset
+    import softcell.analysis.accessor  # noqa: F401  first opens or writes a Dataset
 
 
 def __getattr__(name: str) -> Any:

@@ -1,4 +1,4 @@
-"""A function run in a process of its own (softcell.workflows.alongside), and a local
+"""A function run in a process of its own (softcell.runner.side_process), and a local
 cluster that leaves this process' environment as it found it."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import time
 import pytest
 
 from softcell.errors import SoftcellError
-from softcell.workflows.alongside import Alongside
+from softcell.runner.side_process import Alongside
 
 
 def test_the_result_comes_back_with_the_process_own_time():
@@ -42,7 +42,7 @@ def test_leaving_the_block_early_ends_the_process():
 
 
 def test_a_local_cluster_leaves_the_environment_as_it_found_it():
-    from softcell.workflows.cluster import cluster_client
+    from softcell.runner.cluster import cluster_client
 
     before = dict(os.environ)
     with cluster_client(1) as client:

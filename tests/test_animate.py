@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from softcell.cli import main
-from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
-from softcell.io.animate import animate
 from softcell.io.netcdf import open_dataset
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
+from softcell.video.animate import animate
 
 
 @pytest.fixture(scope="module")

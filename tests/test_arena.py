@@ -3,18 +3,18 @@
 import numpy as np
 import pytest
 
+from softcell.builtins.arena import arena_bot
 from softcell.cli import main
-from softcell.config import CONTACT_CUTOFF_LENGTHS
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model, initial_state
-from softcell.core.engine.compose import compose_bot
-from softcell.core.engine.reference import _curve
-from softcell.core.params import Parameters
-from softcell.core.realization import realization_rng
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model, initial_state
+from softcell.engine.cell import realization_rng
+from softcell.engine.compose import compose_bot
+from softcell.engine.reference import _curve
 from softcell.errors import ParameterError
+from softcell.integrators.rodas4 import pack
 from softcell.io.netcdf import read_dataset
-from softcell.plugins.arena import arena_bot
-from softcell.plugins.rodas4 import pack
+from softcell.model.parameters import Parameters
+from softcell.settings import CONTACT_CUTOFF_LENGTHS
 from softcell.testing.compare import rodas4_jacobians, term_hessians
 
 TERMS = ["bending", "tension", "contact", "arena"]

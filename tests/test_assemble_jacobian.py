@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from softcell.kernels.jacobian import SPARSE_POINTS, assemble_jacobian, spectral_factors
+from softcell.engine.kernels.jacobian import SPARSE_POINTS, assemble_jacobian, spectral_factors
 
 LC = 4
 N = 64

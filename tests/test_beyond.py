@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from softcell.core.runconfig import RunConfig
-from softcell.workflows.beyond import VARIANTS, beyond
-from softcell.workflows.reproduce import Design, VideoDesign
-from softcell.workflows.study import Variant
+from softcell.model.configuration import RunConfig
+from softcell.paper.reproduce import Design, VideoDesign
+from softcell.studies.friction_and_arena import VARIANTS, beyond
+from softcell.studies.variants import Variant
 
 TINY = Design(
     "tiny",
@@ -25,8 +25,8 @@ def test_a_variant_changes_only_its_own_components_and_parameters():
     """Every variant is the base design with its own components and parameters over the
     defaults, and each names a component and parameters that exist (a misspelt one would be
     ignored by the study, not refused)."""
-    from softcell.core.components.registry import default_registry
-    from softcell.core.runconfig import DEFAULT_COMPONENTS
+    from softcell.components.registry import default_registry
+    from softcell.model.configuration import DEFAULT_COMPONENTS
 
     registry = default_registry()
     assert len({v.name for v in VARIANTS}) == len(VARIANTS)

@@ -14,8 +14,8 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.params import MODEL_PARAMETERS
-from softcell.workflows.calibrate import calibrate_bending, calibrate_friction
+from softcell.model.parameters import MODEL_PARAMETERS
+from softcell.paper.calibrate import calibrate_bending, calibrate_friction
 
 F0 = MODEL_PARAMETERS["drive_force"].default
 GAMMA_T = MODEL_PARAMETERS["bot_friction"].default

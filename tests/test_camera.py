@@ -1,5 +1,5 @@
 """Camera footage: the plate calibration against the generator's own camera, and tracking
-through perspective, lens, shadows, sensor, blur and compression (softcell.testing.camera,
+through perspective, lens, shadows, sensor, blur and compression (softcell.testing.footage,
 a ray caster independent of the renderer the round-trip tests use)."""
 
 from dataclasses import replace
@@ -10,12 +10,12 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.camera import CalibrationError, calibrate_from_plate
-from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
-from softcell.io.video import FLAGS, track
-from softcell.testing.camera import Scene, every_effect, film
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
+from softcell.testing.footage import Scene, every_effect, film
+from softcell.video.calibration import CalibrationError, calibrate_from_plate
+from softcell.video.track import FLAGS, track
 
 # The issue's setting: 1024^2 frames at ~10 px/cm, R = 8 cm, a 3 cm ring and a 2.5 cm bot;
 # the cell 12.6 cm from the point below the camera, so the wall is seen edge-on somewhere.
@@ -83,7 +83,7 @@ def test_an_opencv_calibration_file_replaces_the_estimated_lens(simulated, tmp_p
     storage.write("camera_matrix", scene.camera_matrix())
     storage.write("distortion_coefficients", np.array([[scene.k1, 0.0, 0.0, 0.0, 0.0]]))
     storage.release()
-    from softcell.io.video import read_calibration
+    from softcell.video.track import read_calibration
 
     camera = calibrate_from_plate(
         still(scene, simulated, tmp_path), PLATE, calibration=read_calibration(path)
@@ -137,7 +137,7 @@ def test_every_effect_two_seconds(
     assert share >= share_target and gc < gc_target, (share, gc, bot, heading)
     if bot_target is not None:
         assert bot < bot_target and heading < heading_target, (share, gc, bot, heading)
-    from softcell.io.video import count_frames
+    from softcell.video.track import count_frames
 
     assert count_frames(tmp_path / "qa.mkv") == footage.times.size
 

@@ -10,10 +10,10 @@ import pytest
 
 import softcell
 from softcell import write_dataset
-from softcell.core.analysis import analyze
-from softcell.core.params import Parameters
-from softcell.core.schema import simulation_dataset
+from softcell.analysis import analyze
 from softcell.io.netcdf import combine_sweep
+from softcell.model.parameters import Parameters
+from softcell.schema import simulation_dataset
 from softcell.testing.synthetic import stop_and_go_dataset
 
 HERE = Path(__file__).parent / "cf"

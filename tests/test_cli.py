@@ -13,7 +13,7 @@ PY = [sys.executable, "-m", "softcell"]
 
 
 def test_plugins_lists_every_kind(capsys):
-    from softcell.core.components.registry import KINDS
+    from softcell.components.registry import KINDS
 
     assert main(["plugins"]) == 0
     out = capsys.readouterr().out
@@ -116,7 +116,7 @@ def test_version_and_help_import_no_numba_xarray_or_registry():
         "import sys\nfrom softcell.cli import main\n"
         "for argv in (['--version'], ['--help']):\n"
         "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
-        "heavy = [m for m in ('numba', 'xarray', 'softcell.core.components.registry', 'scipy')"
+        "heavy = [m for m in ('numba', 'xarray', 'softcell.components.registry', 'scipy')"
         " if m in sys.modules]\nprint('HEAVY', heavy)\n"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -1,4 +1,4 @@
-"""The on-disk cache of composed models (softcell.core.engine.compiled): a second process
+"""The on-disk cache of composed models (softcell.engine.compiled): a second process
 reads what the first compiled, a changed plugin is never served its old code, corrupt entries
 are rebuilt with a warning, processes starting at once do not trip over each other."""
 
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from softcell.core.engine import compiled
+from softcell.engine import compiled
 from softcell.errors import CacheWarning
 from softcell.io import model_cache
 
@@ -48,7 +48,7 @@ CHILD = textwrap.dedent("""
     import json, sys
     import numpy as np
     sys.path.insert(0, sys.argv[1])
-    from softcell.core.engine import compiled
+    from softcell.engine import compiled
     from cachedplugin import kernel
     source = open(sys.argv[2]).read()
     module = compiled.compile_module("test", source, {"kernel": kernel, "OFFSET": 1.0})
@@ -208,7 +208,7 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
     import re
     from types import SimpleNamespace
 
-    from softcell.plugins.run_and_tumble import run_and_tumble_drive
+    from softcell.builtins.run_and_tumble import run_and_tumble_drive
 
     text = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
     (block,) = [
@@ -228,9 +228,9 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
 MODEL_CHILD = textwrap.dedent("""
     import json
     import numpy as np
-    from softcell.core.engine import build_integrator, build_model, initial_state
-    from softcell.core.components.registry import default_registry
-    from softcell.core.realization import realization_rng
+    from softcell.engine import build_integrator, build_model, initial_state
+    from softcell.components.registry import default_registry
+    from softcell.engine.cell import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
     params = parameters(6.0, 0.2)
@@ -333,7 +333,7 @@ def test_the_kernels_cache_files_live_in_the_cache_and_are_cleared(tmp_path):
     cache = tmp_path / "cache"
     code = (
         "import numpy as np\n"
-        "from softcell.kernels.runs import run_lengths\n"
+        "from softcell.engine.kernels.runs import run_lengths\n"
         "run_lengths(np.array([1, 1, 0, 1], dtype=np.int8), np.zeros(4, dtype=np.int64))\n"
         "print(run_lengths._cache._cache_path)\n"
     )

@@ -11,10 +11,10 @@ import pytest
 import xarray as xr
 
 from softcell.cli import main
-from softcell.core.components.registry import default_registry
-from softcell.core.obstacles import check_clear_of_start, parse_obstacles, surface_distances
+from softcell.components.registry import default_registry
 from softcell.errors import SoftcellError
-from softcell.workflows.constriction import (
+from softcell.model.obstacle_layout import check_clear_of_start, parse_obstacles, surface_distances
+from softcell.studies.constriction import (
     BAND,
     CHAMBER,
     OPEN,

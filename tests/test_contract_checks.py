@@ -5,15 +5,15 @@ import numpy as np
 import pytest
 from numba import njit
 
-from softcell.core.components.contracts import (
+from softcell.components.contracts import (
     DrivingProtocol,
     EnergyTerm,
     FrictionLaw,
     Schedule,
     StopGoDetector,
 )
-from softcell.core.components.registry import Registry
-from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
+from softcell.components.registry import Registry
+from softcell.model.parameters import MODEL_PARAMETERS, ParameterSpec
 from softcell.testing import (
     check_component,
     check_driving_protocol,
@@ -147,7 +147,7 @@ class WrongDerivative(FrictionLaw):
     parameters = (MODEL_PARAMETERS["membrane_friction"],)
 
     def velocity_kernel(self):
-        from softcell.plugins.friction_laws import viscous_velocity
+        from softcell.builtins.friction_laws import viscous_velocity
 
         return viscous_velocity
 

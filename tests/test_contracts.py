@@ -9,12 +9,12 @@ import pytest
 from numba import njit
 
 import softcell
+from softcell.builtins.run_and_tumble import RunAndTumble
 from softcell.cli import main
-from softcell.core.components.contracts import EnergyTerm, FrictionLaw
-from softcell.core.engine import build_model
-from softcell.core.params import MODEL_PARAMETERS, Parameters
+from softcell.components.contracts import EnergyTerm, FrictionLaw
+from softcell.engine import build_model
 from softcell.errors import ContractError
-from softcell.plugins.run_and_tumble import RunAndTumble
+from softcell.model.parameters import MODEL_PARAMETERS, Parameters
 from softcell.testing import registered
 
 
@@ -127,10 +127,10 @@ def test_the_command_line_reports_it_in_one_line_with_exit_2(tmp_path, capsys):
 
 ENGINE_TYPES = """
 import json
-from softcell.core.engine import build_integrator, build_model
-from softcell.core.params import Parameters
-from softcell.core.components.registry import default_registry
-from softcell.core.realization import realization_rng, run_realization
+from softcell.engine import build_integrator, build_model
+from softcell.model.parameters import Parameters
+from softcell.components.registry import default_registry
+from softcell.engine.cell import realization_rng, run_realization
 
 counts = {}
 for integrator, protocol, extra in (("rodas4", "run_and_tumble", {}),
@@ -280,10 +280,10 @@ def test_a_kernel_that_goes_non_finite_later_is_named_when_the_run_fails(
 def test_a_run_that_diverges_with_finite_kernels_says_so():
     # A state that went non-finite while every built-in kernel is finite before it and along
     # its course: the integration itself is blamed, not a component.
-    from softcell.core.engine.probe import diagnose
-    from softcell.core.engine.state import initial_state
+    from softcell.engine.diagnose import diagnose
+    from softcell.engine.state import initial_state
 
-    registry = softcell.core.components.registry.default_registry()
+    registry = softcell.components.registry.default_registry()
     params = registry.parameters({"radius": 4.0, "cutoff": 4, "nodes": 64, "stored_nodes": 16})
     model = build_model(
         params, ["bending", "tension", "contact"], "run_and_tumble", registry=registry

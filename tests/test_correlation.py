@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from softcell.core.analysis import correlation, fits
-from softcell.core.analysis.series import segment_index
+from softcell.analysis import correlation, fits
+from softcell.analysis.series import segment_index
 
 
 def test_constant_velocity_is_correlated_at_every_lag():
@@ -124,12 +124,12 @@ def test_turn_statistics_of_go_phases_turning_by_sixty_degrees():
 def test_contact_reaction_is_minus_the_energy_gradient(tmp_path):
     """The reaction on the bot from a stored membrane equals -dE/d(x, y, theta) by central
     differences of the model's total energy at a touching state."""
-    from softcell.core.components.registry import default_registry
-    from softcell.core.engine.model import build_model
-    from softcell.core.engine.reference import total_energy
-    from softcell.core.engine.state import circle_modes
-    from softcell.kernels.spectral import resample
-    from softcell.workflows.contact import bot_reaction
+    from softcell.components.registry import default_registry
+    from softcell.engine.kernels.spectral import resample
+    from softcell.engine.model import build_model
+    from softcell.engine.reference import total_energy
+    from softcell.engine.state import circle_modes
+    from softcell.paper.reaction import bot_reaction
 
     registry = default_registry()
     components = {

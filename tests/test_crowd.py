@@ -13,18 +13,18 @@ from matplotlib.path import Path as Polygon
 from numba import njit
 
 from softcell.cli import main
-from softcell.config import CONTACT_CUTOFF_LENGTHS
-from softcell.core.assembly import Domain
-from softcell.core.components.registry import default_registry, registered
-from softcell.core.crowd import cell_rngs, run_assembly
-from softcell.core.engine import build_integrator, build_model, circle_modes, equilibrium_radius
-from softcell.core.params import Parameters, ParameterSpec
-from softcell.core.realization import realization_rng, run_realization
-from softcell.core.schema import with_cell
+from softcell.components.registry import default_registry, registered
+from softcell.engine import build_integrator, build_model, circle_modes, equilibrium_radius
+from softcell.engine.cell import realization_rng, run_realization
+from softcell.engine.groups import cell_rngs, run_assembly
+from softcell.engine.kernels.spectral import resample
+from softcell.integrators.rodas4 import compiled_group, group_work, pack
 from softcell.io.netcdf import open_dataset
-from softcell.kernels.spectral import resample
+from softcell.model.assembly import Domain
+from softcell.model.parameters import Parameters, ParameterSpec
 from softcell.plugin import PairTerm, hookimpl
-from softcell.plugins.rodas4 import compiled_group, group_work, pack
+from softcell.schema import with_cell
+from softcell.settings import CONTACT_CUTOFF_LENGTHS
 
 TERMS = ["bending", "tension", "contact"]
 
@@ -247,7 +247,7 @@ def test_no_membrane_goes_into_another_by_more_than_a_few_lambda(seed):
     placement: no membrane point ever gets more than 2 lambda inside another ring (measured
     over twelve seeds: at most 0.51 lambda; a membrane passing through another would go
     centimetres deep)."""
-    from softcell.core.assembly import place_cells
+    from softcell.model.assembly import place_cells
 
     model, stepper = _built(duration=2.0)
     radius = equilibrium_radius(model.params)
@@ -268,8 +268,8 @@ def test_no_membrane_goes_into_a_wall_or_a_post_by_more_than_a_few_lambda(seed):
     """Five cells placed at random in a walled box of side 36 cm around a post of radius 3 cm:
     no membrane point goes more than 2 lambda into another ring, or 3 lambda into the post
     or the walls (the single cell's bound in a corral)."""
-    from softcell.core.assembly import place_cells
-    from softcell.core.obstacles import surface_distances
+    from softcell.model.assembly import place_cells
+    from softcell.model.obstacle_layout import surface_distances
 
     post = "post 0 0 3"
     registry = default_registry()
@@ -348,9 +348,9 @@ def test_an_assembly_that_cannot_run_is_one_line_before_anything_runs(
 
 
 def test_an_interrupted_assembly_resumes_to_the_same_bytes(tmp_path, monkeypatch):
-    import softcell.core.crowd as crowd
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    import softcell.engine.groups as crowd
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     config = RunConfig(
         parameters={"radius": 5.0, "duration": 0.6}, assembly={"cells": 3, "box": 34.0}

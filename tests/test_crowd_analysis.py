@@ -11,9 +11,9 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.runconfig import RunConfig
 from softcell.errors import ConfigError
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
 
 R = 5.0
 BOX = 30.0

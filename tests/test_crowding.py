@@ -14,7 +14,7 @@ import pytest
 import softcell
 from softcell.cli import main
 from softcell.errors import SoftcellError
-from softcell.workflows.crowding import (
+from softcell.studies.crowding import (
     DISCARD,
     CrowdingDesign,
     box_side,
@@ -96,7 +96,7 @@ def test_a_small_study_end_to_end(tmp_path):
 
 
 def test_a_summary_of_points_not_run_says_so(tmp_path):
-    from softcell.workflows.crowding import summarize
+    from softcell.studies.crowding import summarize
 
     summarize(tmp_path, SMALL, seed=0)
     result = json.loads((tmp_path / "crowding.json").read_text())

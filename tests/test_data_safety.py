@@ -25,11 +25,11 @@ from hypothesis import strategies as st
 
 import softcell
 from softcell.cli import main
-from softcell.core.components.registry import default_registry
-from softcell.core.runconfig import RunConfig
+from softcell.components.registry import default_registry
 from softcell.errors import ConfigError
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import plan
 from softcell.testing import registered
-from softcell.workflows.ensemble import plan
 
 PY = [sys.executable, "-m", "softcell"]
 SMALL = [
@@ -349,7 +349,7 @@ def test_a_file_of_another_spawn_key_is_not_reused(sweep, capsys):
 
 
 def test_a_file_of_another_version_is_not_reused(sweep, capsys, monkeypatch):
-    import softcell.workflows.tasks as tasks
+    import softcell.runner.tasks as tasks
 
     monkeypatch.setattr(tasks, "__version__", "99.0")
     assert _simulate(sweep) == 2
@@ -415,7 +415,7 @@ def test_overwrite_recomputes_and_removes_what_is_no_part_of_the_request(sweep, 
 
 
 def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path, capsys):
-    from softcell.workflows.tasks import checkpoint_path, save_checkpoint
+    from softcell.runner.tasks import checkpoint_path, save_checkpoint
 
     out = tmp_path / "sim"
     out.mkdir()
@@ -441,7 +441,7 @@ def test_a_checkpoint_of_another_request_or_a_corrupt_one_stops_the_run(tmp_path
 
 def test_reproduce_into_a_folder_of_another_design_or_seed_stops_before_computing(tmp_path):
     from softcell.errors import SoftcellError
-    from softcell.workflows.reproduce import MANIFEST, Design, _manifest, reproduce
+    from softcell.paper.reproduce import MANIFEST, Design, _manifest, reproduce
 
     design = Design("tiny", radii=(4.0, 12.0), realizations=2, duration=30.0)
     (tmp_path / MANIFEST).write_text(json.dumps(_manifest(design, 0)))
@@ -522,7 +522,7 @@ def test_a_full_disk_is_named_and_leaves_nothing(world, small_disk, capsys, monk
     assert main(["figures", str(world / "an.nc"), "-o", str(small_disk / "figs")]) == 2
     assert "no space left on device" in capsys.readouterr().err
     # Video: the writer never says; the frames read back do.
-    import softcell.io.render as video
+    import softcell.video.render as video
 
     monkeypatch.setattr(video, "DISK_CHECK_EVERY", 10**9)
     assert (
@@ -657,7 +657,7 @@ def test_ctrl_c_on_two_workers_is_one_line_and_resumes(tmp_path):
 def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_path, monkeypatch):
     from test_registry import fake_entry_points
 
-    from softcell.core.components.registry import PluginWarning, Registry
+    from softcell.components.registry import PluginWarning, Registry
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken", good="good")
     # The warning names the distribution "softcell-fake": that name blocks its plugins
@@ -672,7 +672,7 @@ def test_disabled_plugins_by_distribution_name_and_unknown_names_are_warned(tmp_
 def test_plugins_lists_skipped_plugins_on_stdout_and_warns_once(tmp_path, monkeypatch, capsys):
     from test_registry import fake_entry_points
 
-    from softcell.core.components import registry as reg
+    from softcell.components import registry as reg
 
     eps = fake_entry_points(tmp_path, monkeypatch, broken="broken")
     monkeypatch.setattr(reg, "_override", [])
@@ -754,11 +754,11 @@ requests = st.fixed_dictionaries(
     }
 )
 def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
-    from softcell.core.components.registry import default_registry
-    from softcell.core.runconfig import RunConfig
+    from softcell.components.registry import default_registry
     from softcell.errors import SoftcellError
-    from softcell.workflows.ensemble import plan
-    from softcell.workflows.resume import resume_plan, stored_request
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import plan
+    from softcell.runner.resume import resume_plan, stored_request
 
     out = world / "sim"  # made with FIRST, seed 0, 1 realization, the membrane
     values = {**FIRST, "radius": second["radius"], "duration": second["duration"]}

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from softcell.core.components import hookspecs
-from softcell.core.components.contracts import CONTRACTS
-from softcell.core.components.registry import KINDS
+from softcell.components import hookspecs
+from softcell.components.contracts import CONTRACTS
+from softcell.components.registry import KINDS
 
 DOC = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
 
@@ -41,7 +41,7 @@ def test_python_examples_in_the_docs_run(tmp_path, monkeypatch):
 
 
 def test_the_model_page_lists_every_model_parameter():
-    from softcell.core.params import MODEL_PARAMETERS
+    from softcell.model.parameters import MODEL_PARAMETERS
 
     text = (Path(__file__).parents[1] / "docs" / "model.md").read_text()
     table = text.split("## 2. Parameters")[1].split("## 3.")[0]

@@ -13,9 +13,9 @@ from numba import njit
 
 import softcell
 from softcell.cli import main
-from softcell.core.components.contracts import EnergyTerm
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import (
+from softcell.components.contracts import EnergyTerm
+from softcell.components.registry import default_registry
+from softcell.engine import (
     SimulationError,
     build_integrator,
     build_model,
@@ -24,11 +24,11 @@ from softcell.core.engine import (
     sample_times,
     total_energy,
 )
-from softcell.core.params import Parameters, ParameterSpec
-from softcell.core.runconfig import RunConfig
 from softcell.errors import ParameterError
+from softcell.model.configuration import RunConfig
+from softcell.model.parameters import Parameters, ParameterSpec
+from softcell.runner.ensemble import simulate
 from softcell.testing import registered
-from softcell.workflows.ensemble import simulate
 
 # A coarse membrane (cutoff 4) is stable at dt = 1e-5 s, which keeps these tests fast.
 COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}
@@ -75,8 +75,8 @@ def test_same_seed_same_bytes_whatever_the_workers(tmp_path):
 def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
     """Every task goes to dask with its simulated seconds as priority, so a long realization
     never runs alone at the end (the full design puts its 1800 s radii last)."""
-    from softcell.workflows.cluster import run_on_cluster
-    from softcell.workflows.ensemble import plan
+    from softcell.runner.cluster import run_on_cluster
+    from softcell.runner.ensemble import plan
 
     config = RunConfig(parameters={"radius": [4.0, 12.0], "duration": [2.0, 30.5]})
     tasks = plan(config, tmp_path, realizations=1, seed=0, registry=default_registry())
@@ -104,8 +104,8 @@ def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]
 
-    import softcell.core.realization as realization
-    import softcell.workflows.tasks as ensemble
+    import softcell.engine.cell as realization
+    import softcell.runner.tasks as ensemble
 
     calls = {"n": 0}
     original = ensemble.run_realization
@@ -153,7 +153,7 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
     )
     stepper = build_integrator("explicit_euler", params, default_registry()).build(model)
     model.membrane_mobility *= 1e4
-    from softcell.core.realization import realization_rng, run_realization
+    from softcell.engine.cell import realization_rng, run_realization
 
     with pytest.raises(
         SimulationError,
@@ -166,7 +166,7 @@ def test_blow_up_names_time_realization_and_quantity(tmp_path):
 
 @pytest.mark.parametrize("cutoff, points", [(16, 64), (40, 64)])
 def test_blow_up_check_speeds_equal_the_direct_fourier_sum(cutoff, points):
-    from softcell.core.engine.state import _speeds
+    from softcell.engine.state import _speeds
 
     rng = np.random.default_rng(3)
     modes = rng.normal(size=(4, 2 * cutoff + 1)) + 1j * rng.normal(size=(4, 2 * cutoff + 1))

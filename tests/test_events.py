@@ -10,16 +10,16 @@ import pytest
 from numba import njit
 
 import softcell
-from softcell.core.components.contracts import Schedule
-from softcell.core.components.hookspecs import hookimpl
-from softcell.core.components.registry import Registry, default_registry
-from softcell.core.engine import build_integrator, build_model
-from softcell.core.params import Parameters
-from softcell.core.realization import Interrupted, realization_rng, run_realization
+from softcell.builtins.protocols import BumpAndTurn
+from softcell.builtins.run_and_tumble import RunAndTumble
+from softcell.components.contracts import Schedule
+from softcell.components.hookspecs import hookimpl
+from softcell.components.registry import Registry, default_registry
+from softcell.engine import build_integrator, build_model
+from softcell.engine.cell import Interrupted, realization_rng, run_realization
+from softcell.engine.kernels.ellipse import signed_distance
 from softcell.errors import ContractError, ParameterError
-from softcell.kernels.ellipse import signed_distance
-from softcell.plugins.run_and_tumble import RunAndTumble
-from softcell.plugins.strategies import BumpAndTurn
+from softcell.model.parameters import Parameters
 
 TARGET_X, TURN, HEADING, REACH = 7.0, 1.0, 0.3, 0.5
 

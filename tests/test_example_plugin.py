@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_model, circle_modes, force_modes
-from softcell.core.params import Parameters
+from softcell.components.registry import default_registry
+from softcell.engine import build_model, circle_modes, force_modes
 from softcell.errors import ConfigError
+from softcell.model.parameters import Parameters
 from softcell.testing import registered
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
@@ -151,8 +151,8 @@ def test_pressure_pushes_a_circle_out_with_force_p_r(example):
 
 
 def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     with example():
         config = RunConfig(parameters={"radius": 5.0, "duration": 8.0}).updated(
@@ -171,8 +171,8 @@ def test_run_and_reverse_runs_both_ways_at_f0_over_gamma(example, tmp_path):
 
 
 def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path):
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     runs = {}
     with example():
@@ -197,7 +197,7 @@ def test_explicit_auto_stays_stable_and_matches_the_reference(example, tmp_path)
             params, ["bending", "tension", "contact"], "run_and_tumble", registry=default_registry()
         )
         auto = default_registry().get("integrator", "explicit_auto")(params)
-        from softcell.core.engine import explicit_decay_rate
+        from softcell.engine import explicit_decay_rate
 
         dt = auto.step(model)
     assert dt > 1e-6 and dt * explicit_decay_rate(model) <= 2 * 0.5
@@ -304,7 +304,7 @@ def test_a_refused_detector_setting_is_one_line_and_exit_2(site, hysteresis_run,
 
 
 def test_analyze_takes_detector_parameters_as_options(example, hysteresis_run):
-    from softcell.core.analysis import analyze
+    from softcell.analysis import analyze
     from softcell.io.netcdf import open_inputs
 
     ds = open_inputs([hysteresis_run / "run"])
@@ -341,8 +341,8 @@ def test_anisotropic_friction_with_equal_frictions_is_the_viscous_law(example, t
     # Along = across: the law is v = f / gamma_mem at every point, which the engine applies
     # through its general path (points, tangents, force density at M points) instead of the
     # viscous law's direct one. The two runs agree to rounding.
-    from softcell.core.runconfig import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
 
     coarse = {"radius": 4.0, "duration": 0.2, "cutoff": 4, "nodes": 64, "stored_nodes": 16}
     runs = {}

@@ -17,12 +17,12 @@ import xarray as xr
 from MDAnalysis.analysis.msd import EinsteinMSD
 
 import softcell
+from softcell.analysis.msd import msd
 from softcell.cli import main
-from softcell.core.analysis.msd import msd
-from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
 from softcell.io.export import gsd_attributes, to_gsd, to_movement
 from softcell.io.netcdf import open_inputs
+from softcell.model.configuration import RunConfig
 
 
 @pytest.fixture(scope="module")
@@ -181,7 +181,7 @@ REFERENCE = Path(__file__).with_name("data") / "movement_poses_reference.nc"
 
 def _tracked_from(reference: xr.Dataset) -> xr.Dataset:
     """A tracking file (softcell's tracked schema) holding the reference's planted tracks."""
-    from softcell.core.tracking import FLAGS, TrackResult, tracked_dataset
+    from softcell.video.tracker import FLAGS, TrackResult, tracked_dataset
 
     p = reference["position"].values[:, :, :, 0]  # time, space, keypoint
     bot, front, cell = p[:, :, 0], p[:, :, 1], p[:, :, 2]

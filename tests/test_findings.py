@@ -5,8 +5,8 @@ rule on sequences whose answer is known."""
 import numpy as np
 import pytest
 
-from softcell.core.analysis.fits import renewal_msd_slope
-from softcell.workflows.findings import Finding, _trend_test, exponential_test
+from softcell.analysis.fits import renewal_msd_slope
+from softcell.paper.findings import Finding, _trend_test, exponential_test
 
 
 def _walk_slope(go, stop, speed, walkers, total, rng) -> float:
@@ -84,7 +84,7 @@ def _collapsing_sweep(a: float, b: float, seed: int = 0):
 
     import xarray as xr
 
-    from softcell.core.analysis.fits import run_and_tumble_msd
+    from softcell.analysis.fits import run_and_tumble_msd
 
     radii = np.array([6.0, 8.0, 10.0, 12.0])
     lag = np.logspace(-2, 2, 81)
@@ -108,7 +108,7 @@ def _collapsing_sweep(a: float, b: float, seed: int = 0):
 
 
 def test_the_collapse_rule_agrees_with_the_paper_s_pair_and_can_fail():
-    from softcell.workflows.findings import _collapse_findings
+    from softcell.paper.findings import _collapse_findings
 
     (paper,) = _collapse_findings(_collapsing_sweep(1 / 3, -1.0))
     assert paper.verdict == "agrees", paper.measured
@@ -122,8 +122,8 @@ def test_the_collapse_rule_agrees_with_the_paper_s_pair_and_can_fail():
 def test_the_free_bot_is_measured_as_the_paper_measured_it():
     import xarray as xr
 
-    from softcell.core.analysis.fits import run_and_tumble_msd
-    from softcell.workflows.findings import free_bot_measures
+    from softcell.analysis.fits import run_and_tumble_msd
+    from softcell.paper.findings import free_bot_measures
 
     lag = np.logspace(-2, 2.5, 91)
     v0, tau = 10.0, 0.5  # RMS speed (cm/s), mean go time (s)

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from softcell.core.analysis.sweep import analyze
-from softcell.core.params import Parameters
-from softcell.core.schema import FINE_VARIABLES, problems, simulation_dataset
+from softcell.analysis.sweep import analyze
 from softcell.errors import AnalysisWarning
+from softcell.model.parameters import Parameters
+from softcell.schema import FINE_VARIABLES, problems, simulation_dataset
 from softcell.testing.synthetic import two_rate_times
 
 DT, SWITCH, END = 0.01, 100.0, 300.0
@@ -149,7 +149,7 @@ SHORT_RUN = {
 
 def _simulate(out, **kwargs):
     from softcell import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.runner.ensemble import simulate
 
     config = RunConfig(parameters=SHORT_RUN).updated(components={"integrator": "explicit_euler"})
     return simulate(config, out, realizations=1, seed=2, progress=False, **kwargs)
@@ -195,7 +195,7 @@ def test_a_sweep_over_durations_combines_both_time_axes_with_padding(tmp_path):
     them and broadcast every variable over the other)."""
     import softcell
     from softcell import RunConfig
-    from softcell.workflows.ensemble import simulate
+    from softcell.runner.ensemble import simulate
 
     params = {**SHORT_RUN, "duration": [0.03, 0.05]}
     config = RunConfig(parameters=params).updated(components={"integrator": "explicit_euler"})

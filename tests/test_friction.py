@@ -14,9 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model, circle_modes, total_energy
-from softcell.core.params import Parameters
+from softcell.builtins.friction_laws import coulomb_derivative, coulomb_velocity
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model, circle_modes, total_energy
+from softcell.integrators.rodas4 import pack
+from softcell.model.parameters import Parameters
 from softcell.plugin import (
     MODEL_PARAMETERS,
     EnergyTerm,
@@ -26,8 +28,6 @@ from softcell.plugin import (
     hookimpl,
     registered,
 )
-from softcell.plugins.friction_laws import coulomb_derivative, coulomb_velocity
-from softcell.plugins.rodas4 import pack
 from softcell.testing.compare import rodas4_jacobians
 
 GAMMA = float(MODEL_PARAMETERS["membrane_friction"].default)
@@ -356,8 +356,8 @@ def _ellipse(cutoff, radius=4.0, delta=0.3):
 
 def _largest_restoring_force(registry, modes):
     """max |f| (N cm^-1) of the released ellipse, from the engine's numpy forces."""
-    from softcell.core.engine import force_modes
-    from softcell.core.engine.reference import _curve
+    from softcell.engine import force_modes
+    from softcell.engine.reference import _curve
 
     model = build_model(
         _params(registry), ["bending", "tension"], "run_and_tumble", registry=default_registry()

@@ -1,8 +1,10 @@
-"""The house's layers, checked by parsing every module.
+"""The house's rooms, checked by parsing every module.
 
-Each module of ``softcell`` belongs to a layer (see ``docs/architecture.md``) and may import only
-from the layers below it; the two siblings ``plugins`` and ``io`` never import each other. Imports
-inside functions count: they are arrows too, only hidden.
+Each module of ``softcell`` lives in a room (a folder named by a concept; see
+``docs/architecture.md``). The rooms stand on levels, and a module imports only from rooms on
+lower levels or from its own room; rooms on one level do not import each other. Imports inside
+functions count (they are arrows too, only hidden); imports that only a type checker runs
+(under ``if TYPE_CHECKING:``) do not. No module imports itself back through others.
 """
 
 from __future__ import annotations
@@ -14,39 +16,46 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "softcell"
 
-# layer of each top-level part of the package
-LAYERS = {
-    "config": 0,
-    "errors": 0,
-    "_version": 0,
-    "kernels": 1,
-    "core": 2,
-    "plugins": 3,
-    "io": 3,  # layer 4 in the table, but a sibling of plugins: neither imports the other
-    "workflows": 5,
-    "plugin": 4,  # the public facade for plugin authors: layers 0-3
-    "cli": 6,
-    "__main__": 6,
-    "__init__": 6,
-    "testing": 7,
-}
+#: The levels of the house, lowest first: each room imports only from lower levels and from
+#: itself. The last three hold the faces the public sees: the plugin authors' API, the test
+#: helpers and the command line, and the package itself.
+LEVELS: tuple[tuple[str, ...], ...] = (
+    ("_version", "errors", "settings"),
+    ("kernels",),  # softcell.engine.kernels: compiled functions on arrays
+    ("model",),
+    ("schema",),
+    ("components",),
+    ("engine",),
+    ("builtins", "integrators"),
+    ("analysis",),
+    ("io",),
+    ("video",),
+    ("runner",),
+    ("paper",),
+    ("studies",),
+    ("plugin",),
+    ("testing", "cli"),
+    ("__main__", "__init__"),
+)
+LEVEL = {room: level for level, rooms in enumerate(LEVELS) for room in rooms}
+#: Rooms of the lowest level import each other (errors and settings know the version).
+SHARED_LEVELS = {0}
 
-ALLOWED = {
-    "config": {"config", "errors", "_version"},
-    "errors": {"config", "errors", "_version"},
-    "_version": set(),
-    "kernels": {"config", "errors", "_version", "kernels"},
-    "core": {"config", "errors", "_version", "kernels", "core"},
-    "plugins": {"config", "errors", "_version", "kernels", "core", "plugins"},
-    "io": {"config", "errors", "_version", "kernels", "core", "io"},
-    "plugin": {"config", "errors", "_version", "kernels", "core", "plugins", "plugin"},
-    "workflows": {"config", "errors", "_version", "kernels", "core", "plugins", "io", "workflows"},
-}
+#: Modules that import others by a name string, and the tuple of names they import: the
+#: checker reads those tuples and counts each name as an import.
+IMPORTS_BY_NAME = {"softcell.components.registry": "BUILTIN_PLUGINS"}
+
+#: Arrows allowed against the levels, each for one reason: the registry registers the
+#: built-in components (a level above it) through the same hooks as third-party ones.
+UPWARD = {"softcell.components.registry": {"builtins", "integrators"}}
 
 
-def part_of(module: str) -> str:
-    """The top-level part of ``softcell.a.b`` (``a``), or ``__init__`` for ``softcell`` itself."""
+def room_of(module: str) -> str:
+    """The room of ``softcell.a.b`` (``a``; ``kernels`` for ``softcell.engine.kernels``), or
+    ``__init__`` for ``softcell`` itself."""
     pieces = module.split(".")
+    if pieces[1:3] == ["engine", "kernels"]:
+        return "kernels"
     return pieces[1] if len(pieces) > 1 else "__init__"
 
 
@@ -58,39 +67,49 @@ def module_name(path: Path) -> str:
     return ".".join(pieces)
 
 
+MODULES = sorted(PACKAGE.rglob("*.py"))
+NAMES = {module_name(path) for path in MODULES}
+
+
+def _type_only(tree: ast.Module) -> set[int]:
+    """The ids of the import nodes inside ``if TYPE_CHECKING:`` blocks."""
+    found: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            found |= {id(n) for b in node.body for n in ast.walk(b)}
+    return found
+
+
+def _from_target(node: ast.ImportFrom, package: str) -> str:
+    if not node.level:
+        return node.module or ""
+    base = package.split(".")
+    base = base[: len(base) - node.level + 1]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def imported_modules(path: Path, name: str | None = None) -> list[tuple[int, str]]:
-    """Every ``softcell`` module imported anywhere in the file, with its line; ``name`` is the
-    module's dotted name (by default from its place in the package)."""
+    """Every ``softcell`` module imported anywhere in the file (but under ``TYPE_CHECKING``),
+    with its line; ``from package import name`` counts as an import of the submodule
+    ``package.name`` when there is one. ``name`` is the module's dotted name (by default from
+    its place in the package)."""
     name = module_name(path) if name is None else name
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = [*_named_imports(path, name)]
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+    tree = ast.parse(path.read_text(), filename=str(path))
+    skip = _type_only(tree)
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             found += [(node.lineno, alias.name) for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - node.level + 1]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            if node.module is None or node.level and not node.module:
-                # ``from . import x``: each name may be a module
-                found += [(node.lineno, f"{target}.{alias.name}") for alias in node.names]
-            else:
-                found.append((node.lineno, target))
-    return [(line, module) for line, module in found if module.split(".")[0] == "softcell"]
-
-
-MODULES = sorted(PACKAGE.rglob("*.py"))
-
-#: Modules that import others by a name string, and the tuple of names they import: the
-#: checker reads those tuples and counts each name as an import.
-IMPORTS_BY_NAME = {"softcell.core.components.registry": "BUILTIN_PLUGINS"}
-
-#: Arrows allowed against the layers, each for one reason: the registry registers the
-#: built-in plugins (the layer above it) through the same hooks as third-party ones.
-UPWARD = {"softcell.core.components.registry": {"plugins"}}
+            target = _from_target(node, package)
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                relative_package = node.level and not node.module
+                found.append((node.lineno, sub if sub in NAMES or relative_package else target))
+    return sorted({(line, m) for line, m in found if m.split(".")[0] == "softcell"})
 
 
 def _named_imports(path: Path, name: str) -> list[tuple[int, str]]:
@@ -106,13 +125,22 @@ def _named_imports(path: Path, name: str) -> list[tuple[int, str]]:
     raise AssertionError(f"{name} has no literal tuple {target}")
 
 
+def allowed(source: str, target: str) -> bool:
+    """Whether a module of room ``source`` may import one of room ``target``."""
+    if source == target:
+        return True
+    if LEVEL[source] == LEVEL[target]:
+        return LEVEL[source] in SHARED_LEVELS
+    return LEVEL[target] < LEVEL[source]
+
+
 def test_every_import_by_name_is_a_literal_the_checker_reads():
     """``importlib.import_module`` only where the checker reads what it imports (or where the
     name comes from the user: entry points, the lazy public names of the package)."""
     readers = {
-        "softcell.core.components.registry",  # BUILTIN_PLUGINS, and entry points
+        "softcell.components.registry",  # BUILTIN_PLUGINS, and entry points
         "softcell",  # _LAZY: the public functions, imported on first use
-        "softcell.core.engine.compiled",  # the package of a bound kernel, to hash its files
+        "softcell.engine.compiled",  # the package of a bound kernel, to hash its files
     }
     found = sorted(
         module_name(path)
@@ -123,37 +151,96 @@ def test_every_import_by_name_is_a_literal_the_checker_reads():
     assert {
         n
         for _, n in _named_imports(
-            PACKAGE / "core/components/registry.py", "softcell.core.components.registry"
+            PACKAGE / "components/registry.py", "softcell.components.registry"
         )
-    } >= {"softcell.plugins.rodas4", "softcell.plugins.bending"}
+    } >= {"softcell.integrators.rodas4", "softcell.builtins.bending"}
 
 
-def test_every_part_has_a_layer():
-    parts = {part_of(module_name(path)) for path in MODULES}
-    assert parts <= set(LAYERS), parts - set(LAYERS)
+def test_every_room_has_a_level():
+    rooms = {room_of(module_name(path)) for path in MODULES}
+    assert rooms <= set(LEVEL), rooms - set(LEVEL)
 
 
 @pytest.mark.parametrize("path", MODULES, ids=lambda path: module_name(path))
 def test_imports_point_down(path):
-    source = part_of(module_name(path))
-    allowed = ALLOWED.get(source)
-    if allowed is None:  # cli, the package's __init__, testing: may import anything
-        return
-    allowed = allowed | UPWARD.get(module_name(path), set())
+    name = module_name(path)
+    source = room_of(name)
     wrong = [
         f"{path.relative_to(PACKAGE.parent)}:{line} imports {module}"
         for line, module in imported_modules(path)
-        if part_of(module) not in allowed
+        if not allowed(source, room_of(module)) and room_of(module) not in UPWARD.get(name, ())
     ]
     assert not wrong, "\n".join(wrong)
 
 
-def test_the_checker_sees_inner_and_relative_imports(tmp_path):
-    """The parser finds an import hidden in a function and resolves a relative one (the probe
-    is written to a temporary folder: the checkout may be read-only)."""
+def _cycles(arrows: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    groups: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in arrows.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for v in sorted(arrows):
+        if v not in index:
+            visit(v)
+    return groups
+
+
+def arrows_of(modules: list[Path]) -> dict[str, set[str]]:
+    return {
+        module_name(path): {m for _, m in imported_modules(path) if m != module_name(path)}
+        for path in modules
+    }
+
+
+def test_no_import_circles():
+    """No module imports itself back through others (the registry's arrows to the built-ins
+    excepted: they are registered, not used)."""
+    arrows = arrows_of(MODULES)
+    arrows["softcell.components.registry"] = {
+        m for m in arrows["softcell.components.registry"] if room_of(m) not in UPWARD[
+            "softcell.components.registry"]
+    }  # fmt: skip
+    assert not _cycles(arrows), _cycles(arrows)
+
+
+def test_the_cycle_finder_finds_a_circle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_the_checker_sees_inner_relative_and_type_only_imports(tmp_path):
+    """The parser finds an import hidden in a function, resolves a relative one and skips a
+    type-only one (the probe is written to a temporary folder: the checkout may be
+    read-only)."""
     fake = tmp_path / "_layer_probe.py"
-    source = "def f():\n    from ..workflows import ensemble\n    import softcell.io.files\n"
+    source = (
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    from softcell.paper import report\n"
+        "def f():\n    from ..runner import ensemble\n    import softcell.io.files\n"
+    )
     fake.write_text(source)
-    found = [module for _, module in imported_modules(fake, "softcell.core._layer_probe")]
-    assert found == ["softcell.workflows", "softcell.io.files"]
-    assert [part_of(module) for module in found] == ["workflows", "io"]
+    found = [module for _, module in imported_modules(fake, "softcell.model._layer_probe")]
+    assert found == ["softcell.runner.ensemble", "softcell.io.files"]
+    assert [room_of(module) for module in found] == ["runner", "io"]
+    assert not allowed("model", "runner") and allowed("runner", "model")
+    assert not allowed("builtins", "integrators") and allowed("settings", "errors")

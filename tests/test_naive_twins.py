@@ -9,13 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from softcell.core.analysis.msd import msd
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_model, circle_modes, force_modes, total_energy
-from softcell.core.params import Parameters
-from softcell.kernels.ellipse import signed_distance_local
-from softcell.kernels.linalg import lu_factor, lu_solve, lu_workspace
-from softcell.kernels.runs import run_lengths
+from softcell.analysis.msd import msd
+from softcell.components.registry import default_registry
+from softcell.engine import build_model, circle_modes, force_modes, total_energy
+from softcell.engine.kernels.ellipse import signed_distance_local
+from softcell.engine.kernels.linalg import lu_factor, lu_solve, lu_workspace
+from softcell.engine.kernels.runs import run_lengths
+from softcell.model.parameters import Parameters
 
 COARSE = {"cutoff": 4, "nodes": 64}
 

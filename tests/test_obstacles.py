@@ -7,16 +7,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softcell.cli import main
-from softcell.config import CONTACT_CUTOFF_LENGTHS
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model, initial_state
-from softcell.core.obstacles import check_clear_of_start, obstacle_text, surface_distances
-from softcell.core.params import Parameters
-from softcell.core.realization import realization_rng
-from softcell.core.runconfig import config_from_mapping
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model, initial_state
+from softcell.engine.cell import realization_rng
 from softcell.errors import ConfigError, ParameterError
+from softcell.integrators.rodas4 import pack
 from softcell.io.netcdf import read_dataset
-from softcell.plugins.rodas4 import pack
+from softcell.model.configuration import config_from_mapping
+from softcell.model.obstacle_layout import check_clear_of_start, obstacle_text, surface_distances
+from softcell.model.parameters import Parameters
+from softcell.settings import CONTACT_CUTOFF_LENGTHS
 from softcell.testing.compare import rodas4_jacobians, term_hessians
 
 TERMS = ["bending", "tension", "contact", "obstacles"]
@@ -101,7 +101,7 @@ def test_rodas4_jacobian_with_obstacles_matches_differences():
 def _pushed(text, seed, duration):
     """A ring of R = 4 cm pushed along a random heading for ``duration`` s: its membrane
     (1024 points) at every 0.1 s, and the bot's poses."""
-    from softcell.core.engine.reference import _curve
+    from softcell.engine.reference import _curve
 
     params = _params(obstacles=text, duration=duration)
     model = build_model(params, TERMS, "constant_push", registry=default_registry())

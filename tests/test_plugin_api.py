@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import softcell.plugin
-from softcell.core.components.contracts import CONTRACTS
+from softcell.components.contracts import CONTRACTS
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "plugin" / "src"
@@ -51,8 +51,10 @@ def test_plugin_code_imports_only_softcell_plugin(where, source):
 
 
 def test_the_checker_sees_a_private_import():
-    found = softcell_imports("import softcell.core.params\nfrom softcell.plugin import X\n", "f")
-    assert found == ["f:1 softcell.core.params", "f:2 softcell.plugin"]
+    found = softcell_imports(
+        "import softcell.model.parameters\nfrom softcell.plugin import X\n", "f"
+    )
+    assert found == ["f:1 softcell.model.parameters", "f:2 softcell.plugin"]
 
 
 def test_the_api_holds_every_contract_and_what_it_promises():
@@ -82,7 +84,7 @@ def test_the_docs_example_protocol_runs():
     """The protocol of docs/plugins.md that only changes the schedule: phases of 2-5 ms."""
     import numpy as np
 
-    from softcell.core.params import Parameters
+    from softcell.model.parameters import Parameters
 
     namespace: dict = {}
     block = next(b for b in python_blocks(ROOT / "docs" / "plugins.md") if "Flicker" in b)
@@ -123,8 +125,8 @@ def test_the_renamed_energy_term_attributes_still_work_with_a_warning():
 
 
 def test_a_run_configuration_naming_some_kinds_takes_the_defaults_for_the_others():
-    from softcell.core.components.registry import default_registry
-    from softcell.core.runconfig import DEFAULT_COMPONENTS, RunConfig
+    from softcell.components.registry import default_registry
+    from softcell.model.configuration import DEFAULT_COMPONENTS, RunConfig
 
     config = RunConfig(components={"integrator": "explicit_euler"})
     assert config.components == {**DEFAULT_COMPONENTS, "integrator": "explicit_euler"}

@@ -7,11 +7,11 @@ import types
 import pytest
 
 import softcell
-from softcell.core.analysis.options import ANALYSIS_OPTIONS
-from softcell.core.components.contracts import StopGoDetector
-from softcell.core.components.registry import KINDS, PluginWarning, Registry, default_registry
-from softcell.core.params import MODEL_PARAMETERS, unit_problem
+from softcell.analysis.options import ANALYSIS_OPTIONS
+from softcell.components.contracts import StopGoDetector
+from softcell.components.registry import KINDS, PluginWarning, Registry, default_registry
 from softcell.errors import ConfigError, RegistryError
+from softcell.model.parameters import MODEL_PARAMETERS, unit_problem
 from softcell.testing import registered
 
 
@@ -128,7 +128,7 @@ def test_duplicate_name_is_an_error_naming_both_origins(tmp_path, monkeypatch):
         Registry(entry_points=eps)
     message = str(info.value)
     assert "'threshold'" in message
-    assert "built-in (softcell.plugins.threshold)" in message
+    assert "built-in (softcell.builtins.threshold)" in message
     assert "softcell-fake 1.2 (entry point dup = fakeplugins.duplicate)" in message
 
 
@@ -162,7 +162,7 @@ def test_plugin_registered_for_one_test():
 
 
 def test_hook_docs_mention_units():
-    from softcell.core.components import hookspecs
+    from softcell.components import hookspecs
 
     for hook in KINDS:
         doc = textwrap.dedent(getattr(hookspecs, hook).__doc__)
@@ -172,7 +172,7 @@ def test_hook_docs_mention_units():
 def test_the_registry_knows_its_components_parameters_and_parameters_look_nothing_up():
     from fakeplugins import good
 
-    from softcell.core.params import Parameters
+    from softcell.model.parameters import Parameters
 
     with pytest.raises(ConfigError, match="unknown parameter 'fake_level'"):
         default_registry().parameters({"fake_level": 2.0})

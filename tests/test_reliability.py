@@ -16,8 +16,8 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.params import Parameters
 from softcell.errors import ConfigError, ParameterError, SoftcellError
+from softcell.model.parameters import Parameters
 
 
 def one_line_exit_2(argv, capsys):
@@ -79,7 +79,7 @@ def test_render_refuses_a_negative_seed_before_reading_anything(tmp_path, capsys
 
 
 def test_render_seed_is_checked_by_the_library(tmp_path):
-    from softcell.io.render import render
+    from softcell.video.render import render
 
     with pytest.raises(SoftcellError, match="seed = -1 is not allowed"):
         render(None, tmp_path / "v.mp4", seed=-1)
@@ -213,7 +213,7 @@ def one_run(tmp_path):
 def damage_data(path: Path) -> None:
     """Flip 400 bytes of ``path`` past its header, where the file still opens and its request
     still reads: the damage a rerun used to trust."""
-    from softcell.workflows.resume import stored_request
+    from softcell.runner.resume import stored_request
 
     clean = path.read_bytes()
     for start in range(len(clean) // 2, len(clean) - 400, 97):
@@ -416,8 +416,8 @@ def test_a_study_refuses_a_folder_it_did_not_make(tmp_path, capsys, command):
 
 
 def test_a_study_folder_is_kept_for_its_own_study_and_seed(tmp_path):
-    from softcell.workflows.reproduce import QUICK
-    from softcell.workflows.study import run_variants
+    from softcell.paper.reproduce import QUICK
+    from softcell.studies.variants import run_variants
 
     def run(command, seed, overwrite=False):
         run_variants(

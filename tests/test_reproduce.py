@@ -10,8 +10,8 @@ import xarray as xr
 import softcell
 from softcell.cli import main
 from softcell.errors import SoftcellError
-from softcell.workflows.findings import VERDICTS, cell_values, findings
-from softcell.workflows.reproduce import Design, VideoDesign, reproduce
+from softcell.paper.findings import VERDICTS, cell_values, findings
+from softcell.paper.reproduce import Design, VideoDesign, reproduce
 
 TINY = Design(
     "tiny",

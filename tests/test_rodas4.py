@@ -6,9 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softcell.core.components.contracts import EnergyTerm
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import (
+from softcell.builtins.bending import bending_partials
+from softcell.components.contracts import EnergyTerm
+from softcell.components.registry import default_registry
+from softcell.engine import (
     build_integrator,
     build_model,
     circle_modes,
@@ -16,10 +17,9 @@ from softcell.core.engine import (
     force_modes,
     initial_state,
 )
-from softcell.core.params import MODEL_PARAMETERS, Parameters
-from softcell.core.realization import realization_rng
-from softcell.plugins.bending import bending_partials
-from softcell.plugins.rodas4 import pack
+from softcell.engine.cell import realization_rng
+from softcell.integrators.rodas4 import pack
+from softcell.model.parameters import MODEL_PARAMETERS, Parameters
 from softcell.testing import registered
 from softcell.testing.compare import rodas4_jacobians, rodas4_rhs, term_hessians
 
@@ -59,7 +59,7 @@ def test_analytic_second_derivatives_match_the_fallback(name):
     model = build_model(params, TERMS, "run_and_tumble", registry=default_registry())
     term = model.terms[TERMS.index(name)]
     n = model.nodes
-    from softcell.core.engine.reference import _curve
+    from softcell.engine.reference import _curve
 
     z, zp, zpp = _curve(modes, n)
     w = np.ascontiguousarray(np.stack([z.real, z.imag, zp.real, zp.imag, zpp.real, zpp.imag]))
@@ -135,7 +135,7 @@ class Plugin:
 
 
 def test_a_term_without_second_derivatives_uses_the_documented_fallback():
-    from softcell.core.components.hookspecs import hookimpl
+    from softcell.components.hookspecs import hookimpl
 
     Plugin.softcell_energy_terms = hookimpl(Plugin.softcell_energy_terms)
     with registered(Plugin):
@@ -181,7 +181,7 @@ def reference():
 def test_against_the_explicit_reference(reference, radius):
     """5 s from identical states and schedules: paths within 1e-4 cm at the default
     tolerance, not worse as the tolerance tightens, and the coarse statistics within 1 %."""
-    from softcell.core.engine import Record
+    from softcell.engine import Record
     from softcell.testing.compare import coarse_statistics, parameters, path_difference, run
 
     key = f"r{radius:g}"
@@ -211,7 +211,7 @@ def test_a_fast_bot_never_steps_over_the_membrane():
     step control follows the explicit scheme at dt = 1e-6 s to 1e-4 cm, and the membrane's
     deepest point inside the bot is the same in both (a step over the contact would leave
     the membrane behind the bot, a path difference of centimetres)."""
-    from softcell.kernels.ellipse import signed_distance
+    from softcell.engine.kernels.ellipse import signed_distance
     from softcell.testing.compare import parameters, path_difference, run
 
     params = parameters(4.0, 0.3, drive_force=10 * float(MODEL_PARAMETERS["drive_force"].default))

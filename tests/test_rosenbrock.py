@@ -6,16 +6,16 @@ import numpy as np
 import pytest
 from numba import njit
 
-from softcell.kernels.linalg import lu_solve, lu_workspace
-from softcell.kernels.rosenbrock import (
+from softcell.engine.kernels.linalg import lu_solve, lu_workspace
+from softcell.engine.kernels.rosenbrock import (
     dense_output,
     dense_value,
     error_norm,
     factor_iteration_matrix,
     stages,
 )
-from softcell.plugins.rodas4 import RODAS4
-from softcell.plugins.rodas4_method import (
+from softcell.integrators.rodas4 import RODAS4
+from softcell.integrators.rodas4.method import (
     ERR_ACCEPTED,
     GROW_LIMIT,
     H_ACCEPTED,

@@ -13,7 +13,7 @@ import pytest
 import softcell
 from softcell.cli import main
 from softcell.errors import SoftcellError
-from softcell.workflows.sensitivity import (
+from softcell.studies.sensitivity import (
     BASE,
     VARIANTS,
     candidates,

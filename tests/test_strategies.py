@@ -4,12 +4,12 @@ against closed-form kinematics of the free bot and its renewal or diffusion law.
 import numpy as np
 import pytest
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model
-from softcell.core.engine.state import initial_state
-from softcell.core.freebot import diffusion_from_cycles, firmware_diffusion
-from softcell.core.params import Parameters
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model
+from softcell.engine.free_bot import diffusion_from_cycles, firmware_diffusion
+from softcell.engine.state import initial_state
 from softcell.errors import ParameterError
+from softcell.model.parameters import Parameters
 
 REGISTRY = default_registry()
 

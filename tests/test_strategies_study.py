@@ -14,7 +14,7 @@ import pytest
 import softcell
 from softcell.cli import main
 from softcell.errors import SoftcellError
-from softcell.workflows.strategies import (
+from softcell.studies.locomotion import (
     DISCARD,
     StrategiesDesign,
     softness_ratios,

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.compose import template
+from softcell.engine.compiled import compile_module
+from softcell.engine.compose import template
 from softcell.errors import ContractError
 
 PACKAGE = Path(__file__).resolve().parents[1] / "softcell"
@@ -53,7 +53,7 @@ def test_a_template_declares_exactly_the_names_it_uses_without_defining(path):
 
 
 def test_a_missing_or_an_extra_binding_names_the_template():
-    source = template("softcell.core.engine.templates", "fd_drive_jacobian.py")
+    source = template("softcell.engine.templates", "fd_drive_jacobian.py")
     with pytest.raises(ContractError, match=r"fd_drive_jacobian\.py .*drive not bound"):
         compile_module("fd-drive", source, {})
     with pytest.raises(ContractError, match=r"jacobian\.py .*SPARE bound but not declared"):
@@ -65,7 +65,7 @@ def test_a_traceback_into_a_compiled_template_has_the_templates_line(tmp_path, m
     template: a traceback's line number is the template's own."""
     import traceback
 
-    from softcell.core.engine.compose import Template
+    from softcell.engine.compose import Template
     from softcell.io import model_cache
 
     monkeypatch.setenv(model_cache.CACHE_ENV, str(tmp_path / "cache"))

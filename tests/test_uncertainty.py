@@ -1,4 +1,4 @@
-"""Errors across realizations (softcell.core.analysis.uncertainty): the 68 % interval of an
+"""Errors across realizations (softcell.analysis.uncertainty): the 68 % interval of an
 analysis covers a planted truth at the binomial rate, the error has the size of the spread
 of single-realization values, one realization has none, blocks resample together, and the
 stop/go phases of one simulated cell do not depend on its sampling design."""
@@ -12,9 +12,9 @@ import pytest
 from scipy import stats
 
 import softcell
-from softcell.core.analysis import fits, uncertainty
-from softcell.core.analysis.bootstrap import sweep_estimates
-from softcell.core.analysis.sweep import analyze
+from softcell.analysis import fits, uncertainty
+from softcell.analysis.bootstrap import sweep_estimates
+from softcell.analysis.sweep import analyze
 from softcell.errors import AnalysisWarning
 from softcell.testing.synthetic import stop_and_go_dataset
 

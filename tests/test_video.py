@@ -6,11 +6,11 @@ import pytest
 
 import softcell
 from softcell.cli import main
-from softcell.core.runconfig import RunConfig
 from softcell.errors import SoftcellError
-from softcell.io.render import render
-from softcell.io.video import FLAGS, track
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
+from softcell.video.render import render
+from softcell.video.track import FLAGS, track
 
 # A coarse membrane (cutoff 4, stable at dt = 1e-5 s) keeps the simulation cheap; the
 # renderer and tracker do not care how the record was made.

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import softcell
-from softcell.core.runconfig import RunConfig
-from softcell.io.render import render
-from softcell.io.video import track
-from softcell.workflows.ensemble import simulate
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
+from softcell.video.render import render
+from softcell.video.track import track
 
 pytestmark = pytest.mark.slow
 COARSE = {"cutoff": 4, "nodes": 64, "stored_nodes": 16, "dt": 1e-5}

@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 import softcell
-from softcell.core.params import MODEL_PARAMETERS
-from softcell.workflows.constriction import (
+from softcell.model.parameters import MODEL_PARAMETERS
+from softcell.studies.constriction import (
     FULL,
     ConstrictionDesign,
     channel,
@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> None:
     if passage is None:
         sys.exit("no R = 5 cm cell passed any gap: no movie")
     path, at, gap = passage
-    from softcell.io.animate import animate
+    from softcell.video.animate import animate
 
     sys.path.insert(0, str(Path(__file__).parents[1] / "gallery"))
     from make import still  # the gallery's frame grabber

@@ -28,7 +28,7 @@ import numpy as np
 from matplotlib.path import Path as Polygon
 
 import softcell
-from softcell.core.runconfig import RunConfig, with_obstacle_term
+from softcell.model.configuration import RunConfig, with_obstacle_term
 
 RADIUS, DURATION, SEED = 5.0, 60.0, 0
 CROWD = {"cells": 16, "box": round(math.sqrt(16 * math.pi * RADIUS**2 / 0.35), 1)}
@@ -152,7 +152,7 @@ def deepest(ds, box: float, periodic: bool) -> float:
 
 def into_post(ds, obstacles: str) -> float:
     """The deepest any stored membrane point went into an obstacle (cm)."""
-    from softcell.core.obstacles import surface_distances
+    from softcell.model.obstacle_layout import surface_distances
 
     x, y = ds["membrane_x"].values, ds["membrane_y"].values
     return max(0.0, float(-surface_distances(x, y, obstacles).min()))

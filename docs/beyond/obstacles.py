@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 import softcell
-from softcell.core.obstacles import parse_obstacles, surface_distances
-from softcell.core.runconfig import RunConfig, with_obstacle_term
+from softcell.model.configuration import RunConfig, with_obstacle_term
+from softcell.model.obstacle_layout import parse_obstacles, surface_distances
 
 RADIUS, DURATION, REALIZATIONS, SEED = 5.0, 600.0, 8, 0
 CHANNEL = (

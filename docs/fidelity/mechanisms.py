@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import softcell
-from softcell.core.analysis import fits
+from softcell.analysis import fits
 
 #: Free-bot variants: the file stem and what it is.
 FREE_BOT = {
@@ -58,7 +58,7 @@ def free_bot(folder: Path) -> dict:
 def convergence(folder: Path) -> dict:
     """The key numbers of every numerical variant per radius, with standard errors across
     realizations (the same seed: common random numbers)."""
-    from softcell.core.analysis.bootstrap import sweep_estimates
+    from softcell.analysis.bootstrap import sweep_estimates
 
     out = {}
     for name, what in CONVERGENCE.items():

@@ -7,7 +7,7 @@
 Simulates (into DIR, default a temporary folder; root seed 0) four realizations of one cell of
 R = 6 cm for 30 s, and 16 cells of R = 5 cm at an area fraction of 0.35 in a periodic box for
 30 s, then animates its first 20 s as an H.264 MP4 into docs/_static/gallery (360 px high,
-30 frames/s, real time, constant rate factor 28) with ``softcell.io.animate.animate``, the
+30 frames/s, real time, constant rate factor 28) with ``softcell.video.animate.animate``, the
 function behind ``softcell animate``, and keeps its frame at t = 15 s as a PNG beside this
 script.
 """
@@ -20,8 +20,8 @@ import tempfile
 from pathlib import Path
 
 import softcell
-from softcell.core.runconfig import RunConfig
-from softcell.io.animate import animate
+from softcell.model.configuration import RunConfig
+from softcell.video.animate import animate
 
 SEED, DURATION = 0, 30.0
 CLIP = 20.0  # s of each run in its movie

@@ -6,8 +6,8 @@ import os
 import tomllib
 from pathlib import Path
 
-from softcell.core.runconfig import RunConfig, config_from_mapping
 from softcell.errors import ConfigError
+from softcell.model.configuration import RunConfig, config_from_mapping
 
 
 def load_config(path: str | os.PathLike[str]) -> RunConfig:

@@ -28,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from softcell.errors import SoftcellError
+from softcell.io.files import atomic_write
 
 #: The GSD particle types, in order of their type ids.
 TYPES = ("membrane", "bot")
@@ -174,8 +175,6 @@ def to_gsd(
     """
     import gsd.hoomd
 
-    from softcell.io.files import atomic_write
-
     path = check_gsd_path(path)
     if every < 1:
         raise SoftcellError(f"--every {every} is not allowed: must be >= 1")
@@ -222,29 +221,6 @@ def _plain(value):
     return value.item() if isinstance(value, np.generic) else value
 
 
-def gsd_attributes(path: str | os.PathLike[str]) -> dict | None:
-    """The softcell attributes frame 0 of a GSD file logs.
-
-    Parameters
-    ----------
-    path : path-like
-        A GSD file.
-
-    Returns
-    -------
-    dict or None
-        The attributes of the simulation file it was exported from (parameters, seed,
-        components, version), None when frame 0 logs none.
-    """
-    import gsd.hoomd
-
-    with gsd.hoomd.open(path, "r") as trajectory:
-        if len(trajectory) == 0:
-            return None
-        raw = trajectory[0].log.get("softcell/attributes")
-    return None if raw is None else json.loads(np.asarray(raw, dtype=np.uint8).tobytes())
-
-
 # -- movement's poses dataset -----------------------------------------------------------------
 
 #: The keypoints of a poses dataset: the bot's centre, the point its heading marks at its
@@ -286,8 +262,6 @@ def to_movement(
         For an input that is neither, a realization it does not hold, samples that are not
         evenly spaced in time (movement's ``fps``), or an output not ending in ``.nc``.
     """
-    from softcell.io.files import atomic_write
-
     path = Path(path)
     if path.suffix.lower() != ".nc":
         raise SoftcellError(f"-o {path}: a movement poses file is netCDF and ends in .nc")
@@ -335,7 +309,7 @@ def to_movement(
 def _poses(one: xr.Dataset, ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """(time, 2, keypoints, cells) positions in cm, (time, keypoints, cells) confidences and
     the individuals' names."""
-    from softcell.core.params import MODEL_PARAMETERS
+    from softcell.model.parameters import MODEL_PARAMETERS
 
     params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
     semi_major = float(params.get("bot_semi_major", MODEL_PARAMETERS["bot_semi_major"].default))

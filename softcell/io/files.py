@@ -27,8 +27,8 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from softcell.core.limits import human_bytes
 from softcell.errors import SoftcellError
+from softcell.model.limits import human_bytes
 
 #: The kinds of output, and how an existing file of that kind is recognised.
 KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report", "export")
@@ -225,8 +225,6 @@ def kind_of(path: str | os.PathLike[str]) -> str | None:
             marks = (b"softcell reproduction report", b'"softcell_version"')
             return "report" if any(m in head for m in marks) else None
         if suffix == ".gsd":
-            from softcell.io.export import gsd_attributes
-
             return "export" if gsd_attributes(path) else None
     except (OSError, RuntimeError, ValueError):
         return None
@@ -430,3 +428,28 @@ def remove(paths: Iterable[str | os.PathLike[str]]) -> None:
             shutil.rmtree(path)
         else:
             path.unlink(missing_ok=True)
+
+
+def gsd_attributes(path: str | os.PathLike[str]) -> dict | None:
+    """The softcell attributes frame 0 of a GSD file logs.
+
+    Parameters
+    ----------
+    path : path-like
+        A GSD file.
+
+    Returns
+    -------
+    dict or None
+        The attributes of the simulation file it was exported from (parameters, seed,
+        components, version), None when frame 0 logs none.
+    """
+    import gsd.hoomd
+
+    with gsd.hoomd.open(path, "r") as trajectory:
+        if len(trajectory) == 0:
+            return None
+        raw = trajectory[0].log.get("softcell/attributes")
+    import numpy as np
+
+    return None if raw is None else json.loads(np.asarray(raw, dtype=np.uint8).tobytes())

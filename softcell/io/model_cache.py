@@ -1,6 +1,6 @@
 """The compiled-model cache on disk: where it is, what an entry holds, writing and clearing it.
 
-:mod:`softcell.core.engine.compiled` keys each composed model and runs its generated source;
+:mod:`softcell.engine.compiled` keys each composed model and runs its generated source;
 this module keeps that source on disk, one directory per *entry*, so that numba caches the
 compiled functions beside it like those of any other module::
 
@@ -144,7 +144,7 @@ def _entry_problem(folder: Path, source: str) -> str | None:
 
 
 class DiskStore:
-    """The store of generated modules that :mod:`softcell.core.engine.compiled` uses: one
+    """The store of generated modules that :mod:`softcell.engine.compiled` uses: one
     entry per key under :func:`cache_dir` (read when each module is placed, so
     ``$SOFTCELL_CACHE_DIR`` may change within a session)."""
 
@@ -206,7 +206,7 @@ _PACKAGE = Path(__file__).resolve().parents[1]
 def _kernel_code() -> str:
     """A digest of softcell's compiled parts (the files compiled code is made of), read once
     per process."""
-    from softcell.core.engine.compiled import package_hash
+    from softcell.engine.compiled import package_hash
 
     return package_hash("softcell")[:20]
 
@@ -266,7 +266,7 @@ def _use_kernel_locator() -> None:
 def _meta(label: str, description: str) -> dict[str, str]:
     import numba
 
-    from softcell.core.engine.compiled import environment_key
+    from softcell.engine.compiled import environment_key
 
     return {
         "label": label,
@@ -306,7 +306,7 @@ def foreign(root: Path) -> list[Path]:
 def entries(root: Path | None = None) -> list[Entry]:
     """The cache's entries, oldest first: the folders with softcell's entry marker (anything
     else in the folder is no entry, see :func:`foreign`)."""
-    from softcell.core.engine.compiled import environment_key
+    from softcell.engine.compiled import environment_key
 
     root = cache_dir() if root is None else root
     out: list[Entry] = []

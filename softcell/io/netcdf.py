@@ -24,10 +24,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-import softcell.core.analysis.accessor  # noqa: F401  (registers ds.softcell)
-from softcell.core.params import MODEL_PARAMETERS, ParameterSpec
+import softcell.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.errors import ConfigError, SoftcellError
 from softcell.io.files import atomic_write, no_input
+from softcell.model.parameters import MODEL_PARAMETERS, ParameterSpec
 
 #: Keyword arguments that keep simulated time as plain seconds.
 DECODE = {"decode_times": False, "decode_timedelta": False}

@@ -35,7 +35,7 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
-from softcell.core.components.contracts import (
+from softcell.components.contracts import (
     Component,
     DrivingProtocol,
     EnergyTerm,
@@ -47,13 +47,13 @@ from softcell.core.components.contracts import (
     Stepper,
     StopGoDetector,
 )
-from softcell.core.components.hookspecs import hookimpl
-from softcell.core.components.registry import registered
-from softcell.core.engine.model import Model
-from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
-from softcell.core.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
+from softcell.components.hookspecs import hookimpl
+from softcell.components.registry import registered
+from softcell.engine.model import Model
 from softcell.errors import ContractError, ParameterError
+from softcell.model.parameters import MODEL_PARAMETERS, Parameters, ParameterSpec
 from softcell.plugin import blocks
+from softcell.schema import GO, PHASE_RUN, PHASE_TUMBLE, PHASE_UNKNOWN, STOP, STOPGO_UNKNOWN
 
 __all__ = [
     "GO",

@@ -17,17 +17,17 @@ Compiling once per machine
 
 from __future__ import annotations
 
-from softcell.core.engine.compiled import compile_module
-from softcell.core.engine.reference import explicit_decay_rate
-from softcell.errors import CacheWarning
-from softcell.plugins.explicit_euler import ExplicitEulerStepper
-from softcell.plugins.run_and_tumble import (
+from softcell.builtins.run_and_tumble import (
     PivotRunAndTumble,
     RunAndTumble,
     alternating_schedule,
     pivot_drive,
     run_and_tumble_drive,
 )
+from softcell.engine.compiled import compile_module
+from softcell.engine.reference import explicit_decay_rate
+from softcell.errors import CacheWarning
+from softcell.integrators.explicit_euler import ExplicitEulerStepper
 
 __all__ = [
     "CacheWarning",

@@ -5,14 +5,14 @@
 - :func:`check_component` (and :func:`check_energy_term`, :func:`check_friction_law`,
   :func:`check_driving_protocol`, :func:`check_stopgo_detector`, :func:`check_pair_term`): a
   component checked against
-  its contract (:mod:`softcell.testing.contracts`), for a plugin's tests.
+  its contract (:mod:`softcell.testing.checks`), for a plugin's tests.
 - :mod:`softcell.testing.strategies`: Hypothesis strategies (needs the ``test`` extra).
-- :mod:`softcell.testing.camera`: camera-like footage of a simulated cell (a ray caster:
+- :mod:`softcell.testing.footage`: camera-like footage of a simulated cell (a ray caster:
   perspective, lens, shadows, sensor noise, blur, compression), to test a tracker.
 """
 
-from softcell.core.components.registry import registered
-from softcell.testing.contracts import (
+from softcell.components.registry import registered
+from softcell.testing.checks import (
     check_component,
     check_driving_protocol,
     check_energy_term,

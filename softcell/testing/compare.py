@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import (
+from softcell.components.registry import default_registry
+from softcell.engine import (
     Model,
     Record,
     build_integrator,
@@ -20,10 +20,10 @@ from softcell.core.engine import (
     fd_hessian,
     force_modes,
 )
-from softcell.core.params import Parameters
-from softcell.core.realization import run_realization
-from softcell.core.schema import PHASE_RUN as RUN
-from softcell.core.schema import PHASE_TUMBLE as TUMBLE
+from softcell.engine.cell import run_realization
+from softcell.model.parameters import Parameters
+from softcell.schema import PHASE_RUN as RUN
+from softcell.schema import PHASE_TUMBLE as TUMBLE
 
 #: The model of the comparisons: the paper's membrane and protocol.
 TERMS = ("bending", "tension", "contact")
@@ -53,7 +53,7 @@ def parameters(radius: float, duration: float, **extra: object) -> Parameters:
 
 def run(params: Parameters, integrator: str, seed: int = 0) -> Run:
     """Run realization 0 of point 0 with root ``seed`` (the ensemble's stream) and time it."""
-    from softcell.core.realization import realization_rng
+    from softcell.engine.cell import realization_rng
 
     model = build_model(params, TERMS, PROTOCOL, registry=default_registry())
     stepper = build_integrator(integrator, params, default_registry()).build(model)

@@ -12,8 +12,8 @@ import numpy as np
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from softcell.core.params import MODEL_PARAMETERS, Parameters, ParameterSpec
-from softcell.core.schema import simulation_dataset
+from softcell.model.parameters import MODEL_PARAMETERS, Parameters, ParameterSpec
+from softcell.schema import simulation_dataset
 
 _finite = {"allow_nan": False, "allow_infinity": False}
 

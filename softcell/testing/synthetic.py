@@ -13,8 +13,8 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from softcell.core.params import Parameters
-from softcell.core.schema import simulation_dataset
+from softcell.model.parameters import Parameters
+from softcell.schema import simulation_dataset
 
 
 def stop_and_go_path(

@@ -3,8 +3,8 @@
 import numpy as np
 
 from softcell import hookimpl
-from softcell.core.components.contracts import StopGoDetector
-from softcell.core.params import ParameterSpec
+from softcell.components.contracts import StopGoDetector
+from softcell.model.parameters import ParameterSpec
 
 
 class Bananas(StopGoDetector):

@@ -1,7 +1,7 @@
 """A plugin whose detector takes the name of the built-in one."""
 
 from softcell import hookimpl
-from softcell.core.components.contracts import StopGoDetector
+from softcell.components.contracts import StopGoDetector
 
 
 class Threshold(StopGoDetector):

@@ -1,7 +1,7 @@
 """A plugin whose component breaks the contract (no description, abstract method left)."""
 
 from softcell import hookimpl
-from softcell.core.components.contracts import StopGoDetector
+from softcell.components.contracts import StopGoDetector
 
 
 class Incomplete(StopGoDetector):

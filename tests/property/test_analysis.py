@@ -9,12 +9,12 @@ from hypothesis.extra import numpy as hnp
 from scipy.special import ellipe
 
 import softcell
-from softcell.core.analysis import analyze, fits, stopgo
-from softcell.core.analysis.msd import msd, msd_sums
-from softcell.core.analysis.series import polygon_area_perimeter_centroid, shape_index
-from softcell.core.analysis.sweep import COLLAPSE_VARIANTS, _collapse
+from softcell.analysis import analyze, fits, stopgo
+from softcell.analysis.msd import msd, msd_sums
+from softcell.analysis.series import polygon_area_perimeter_centroid, shape_index
+from softcell.analysis.sweep import COLLAPSE_VARIANTS, _collapse
+from softcell.builtins.threshold import Threshold
 from softcell.errors import SoftcellError
-from softcell.plugins.threshold import Threshold
 from softcell.testing.synthetic import stop_and_go_dataset, two_rate_times
 
 #: These planted datasets have no fine record: their MSD comes from the two-rate samples

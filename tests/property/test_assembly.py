@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softcell.core.assembly import Domain, contact_groups, place_cells
 from softcell.errors import ParameterError, SoftcellError
+from softcell.model.assembly import Domain, contact_groups, place_cells
 
 
 def _groups_by_brute_force(centres, radii, reach, box):
@@ -96,7 +96,7 @@ def test_placement_keeps_clear_of_obstacles():
     centres = place_cells(
         12, 4.0, domain, np.random.default_rng(1), placement="random", obstacles=obstacles
     )
-    from softcell.core.obstacles import surface_distances
+    from softcell.model.obstacle_layout import surface_distances
 
     assert surface_distances(centres[:, 0], centres[:, 1], obstacles).min() >= 4.0 + 1.0
     with pytest.raises(SoftcellError, match=r"on a lattice: a ring would come within 1 cm of an"):

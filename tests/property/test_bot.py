@@ -7,17 +7,17 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model
-from softcell.core.freebot import (
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model
+from softcell.engine.cell import realization_rng, run_realization
+from softcell.engine.free_bot import (
     cycle_displacements,
     diffusion_from_cycles,
     renewal_diffusion,
     turn_correlation,
 )
-from softcell.core.params import Parameters
-from softcell.core.realization import realization_rng, run_realization
-from softcell.kernels.ellipse import signed_distance
+from softcell.engine.kernels.ellipse import signed_distance
+from softcell.model.parameters import Parameters
 
 
 def brute_distance(px, py, a, b):
@@ -146,7 +146,7 @@ def test_pivot_drive_turns_the_free_bot_about_its_pivot():
 def test_distances_four_roots_at_a_time_are_the_same_numbers(a, ratio, points):
     # The contact finds the roots of four points at a time, interleaved: each point's
     # Newton iterates must be its own, to the last bit (runs keep their bytes).
-    from softcell.kernels.ellipse import signed_distance_local, signed_distances_local
+    from softcell.engine.kernels.ellipse import signed_distance_local, signed_distances_local
 
     b = a * ratio
     px = np.array([p[0] for p in points] + [0.0])

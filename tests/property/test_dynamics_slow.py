@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 import softcell
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import build_integrator, build_model, membrane_length
-from softcell.core.params import Parameters
-from softcell.core.realization import realization_rng, run_realization
-from softcell.core.runconfig import RunConfig
-from softcell.workflows.ensemble import simulate
+from softcell.components.registry import default_registry
+from softcell.engine import build_integrator, build_model, membrane_length
+from softcell.engine.cell import realization_rng, run_realization
+from softcell.model.configuration import RunConfig
+from softcell.model.parameters import Parameters
+from softcell.runner.ensemble import simulate
 
 pytestmark = pytest.mark.slow
 

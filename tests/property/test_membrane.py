@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softcell.core.components.registry import default_registry
-from softcell.core.engine import (
+from softcell.components.registry import default_registry
+from softcell.engine import (
     build_model,
     circle_modes,
     equilibrium_radius,
@@ -17,7 +17,7 @@ from softcell.core.engine import (
     membrane_jacobian,
     total_energy,
 )
-from softcell.core.params import Parameters
+from softcell.model.parameters import Parameters
 
 TERMS = ["bending", "tension", "contact"]
 radii = st.floats(3.5, 13.0)

@@ -8,10 +8,10 @@ import xarray as xr
 from hypothesis import given, settings
 
 from softcell import open_dataset, read_dataset, validate, write_dataset
-from softcell.core.params import Parameters
-from softcell.core.schema import problems, simulation_dataset
 from softcell.errors import SchemaError, SoftcellError
 from softcell.io.netcdf import combine_sweep
+from softcell.model.parameters import Parameters
+from softcell.schema import problems, simulation_dataset
 from softcell.testing.strategies import simulation_datasets
 
 

@@ -5,8 +5,8 @@ import math
 import pytest
 from hypothesis import given
 
-from softcell.core.params import MODEL_PARAMETERS, Parameters, expand_sweep
 from softcell.errors import ConfigError, ParameterError
+from softcell.model.parameters import MODEL_PARAMETERS, Parameters, expand_sweep
 from softcell.testing.strategies import invalid_parameter_values, valid_parameter_values
 
 

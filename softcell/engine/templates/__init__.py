@@ -1,0 +1,2 @@
+"""Sources of generated modules (:mod:`softcell.engine.compiled`), read as text and never
+imported: the names they use without defining are bound by the code that compiles them."""

@@ -1,0 +1,679 @@
+"""RODAS4: an adaptive, L-stable, stiffly accurate Rosenbrock method of order 4(3) (Hairer &
+Wanner, Solving ODEs II, section IV.7; coefficients of their code RODAS), for the whole coupled
+system: the membrane modes, the contact and the bot (~70 unknowns).
+
+Each step factors W = I / (h gamma) - J once, with J the Jacobian of the full right-hand side
+(:mod:`softcell.engine.kernels.jacobian`), and solves six linear systems; the sixth stage is the
+embedded error estimate. Steps adapt to the error (Gustafsson's predictive controller within
+a phase; after two rejections of one step, the error's observed order in h sets the next try,
+see :func:`softcell.integrators.rodas4.method.step_factor`), land
+exactly on the protocol's switching times (within a step the right-hand side is autonomous),
+and samples come from the method's continuous extension, so the sampling grid never
+constrains the step. Everything runs inside one compiled loop; nothing is allocated per step.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from softcell.components.contracts import SENSE_SIZE, Integrator, Schedule
+from softcell.components.hookspecs import hookimpl
+from softcell.engine import (
+    Model,
+    SimulationError,
+    Stepper,
+    compose_hessians,
+    compose_partials,
+    fd_drive_jacobian,
+    nonlinear_friction,
+    placeholders,
+)
+from softcell.engine.compiled import compile_module
+from softcell.engine.compose import compose_bot, compose_pair_laws, template
+from softcell.engine.kernels.jacobian import spectral_factors
+from softcell.engine.kernels.linalg import lu_workspace
+from softcell.engine.state import event_state
+from softcell.errors import ParameterError
+from softcell.integrators.rodas4.method import (  # shared with the template templates/loop.py
+    ERR_ACCEPTED,
+    H_ACCEPTED,
+    H_LAST,
+    H_NEXT,
+    JACOBIANS,
+    OK,
+    REJECTED,
+    RHS_CALLS,
+    RODAS4,
+    SINGULAR,
+    STEP_UNDERFLOW,
+    STEPS,
+    Coefficients,
+    Control,
+    EventLog,
+    LoopState,
+    PhaseTable,
+    Problem,
+    T,
+)
+from softcell.model.parameters import ParameterSpec
+
+Grid = namedtuple(
+    "Grid",
+    [
+        "spec",
+        "curve",
+        "w",
+        "parts",
+        "q",
+        "fhat",
+        "dpose",
+        "saved",
+        "plus",
+        "minus",
+        "hww",
+        "hwp",
+        "hpp",
+        "twiddle",
+        "index",
+        "active",
+        "n_active",
+        "touched",
+        "n_touched",
+        "buf_a",
+        "buf_b",
+        "scratch",
+    ],
+)
+
+Workspace = namedtuple(
+    "Workspace",
+    [
+        "modes",
+        "smooth",
+        "fine",
+        "drv",
+        "steps",
+        "dplus",
+        "dminus",
+        "pose_tmp",
+        "djac",
+        "drv_plus",
+        "drv_minus",
+        "a_hat",
+        "b_hat",
+        "g_hat",
+        "cal_a",
+        "cal_b",
+        "factors",
+        "orders",
+        "magnitudes",
+        "rotated",
+        "jac",
+        "mat",
+        "pivots",
+        "k",
+        "f0",
+        "y",
+        "ynew",
+        "force",
+        "drag",
+        "law",
+        "bot_hpp",
+        "sense",
+    ],
+)
+
+
+def grid(n: int, m: int) -> Grid:
+    """Scratch arrays of one collocation grid of n points (m = 2 Lc + 1 modes). ``spec``
+    holds the curve's spectrum only: just the modes' bins are ever written, the others stay
+    zero."""
+    c = np.complex128
+    return Grid(
+        spec=np.zeros(n, c),
+        curve=np.zeros((3, n), c),
+        w=np.zeros((6, n)),
+        parts=np.zeros((6, n)),
+        q=np.zeros((3, n), c),
+        fhat=np.zeros(m, c),
+        dpose=np.zeros(3),
+        saved=np.zeros(n),
+        plus=np.zeros((6, n)),
+        minus=np.zeros((6, n)),
+        hww=np.zeros((n, 6, 6)),
+        hwp=np.zeros((n, 6, 3)),
+        hpp=np.zeros((3, 3)),
+        twiddle=np.exp(-2j * np.pi * np.arange(n) / n),
+        index=np.zeros(n, np.int64),
+        active=np.zeros(n, np.int64),
+        n_active=np.zeros(1, np.int64),
+        touched=np.zeros(n, np.int64),
+        n_touched=np.zeros(1, np.int64),
+        buf_a=np.zeros(n, c),
+        buf_b=np.zeros(n, c),
+        scratch=np.zeros(n, c),
+    )
+
+
+def workspace(model: Model, smooth_nodes: int) -> Workspace:
+    """Every scratch array of the compiled loop, allocated once per stepper."""
+    n, lc = model.nodes, model.cutoff
+    m = 2 * lc + 1
+    nu = 2 * m + 3
+    scale = model.params.membrane_length / (2 * math.pi)
+    c = np.complex128
+    factors, orders, magnitudes = np.zeros((3, m), c), np.zeros((3, m), c), np.zeros((3, m))
+    spectral_factors(lc, factors, orders, magnitudes)
+    return Workspace(
+        modes=np.zeros(m, c),
+        smooth=grid(smooth_nodes, m),
+        fine=grid(n, m),
+        drv=np.zeros(3),
+        steps=np.array([1e-7 * scale] * 8 + [1e-7]),
+        dplus=np.zeros(3),
+        dminus=np.zeros(3),
+        pose_tmp=np.zeros(3),
+        djac=np.zeros((3, 3)),
+        drv_plus=np.zeros(3),
+        drv_minus=np.zeros(3),
+        a_hat=np.zeros(4 * lc + 1, c),
+        b_hat=np.zeros(4 * lc + 1, c),
+        g_hat=np.zeros(m, c),
+        cal_a=np.zeros((m, m), c),
+        cal_b=np.zeros((m, m), c),
+        factors=factors,
+        orders=orders,
+        magnitudes=magnitudes,
+        rotated=np.zeros((8, 4 * lc + 1)),
+        jac=np.zeros((nu, nu)),
+        mat=np.zeros((nu, nu)),
+        pivots=lu_workspace(nu, transposed=True),
+        k=np.zeros((6, nu)),
+        f0=np.zeros(nu),
+        y=np.zeros(nu),
+        ynew=np.zeros(nu),
+        force=np.zeros(nu),
+        drag=np.zeros(3),
+        law=nonlinear_friction.model_workspace(model, nu),
+        bot_hpp=np.zeros((3, 3)),
+        sense=np.zeros(SENSE_SIZE),
+    )
+
+
+def groups(model: Model) -> tuple[list, list]:
+    """The model's terms split into those evaluated on the coarse grid (``smooth``) and the
+    others, each as a list of (index, term)."""
+    smooth = [(i, t) for i, t in enumerate(model.terms) if t.smooth]
+    other = [(i, t) for i, t in enumerate(model.terms) if not t.smooth]
+    return smooth, other
+
+
+def _names(terms) -> str:
+    return " + ".join(t.name for t in terms) or "none"
+
+
+class _Group(NamedTuple):
+    """What the loop template binds for one group of terms (the smooth terms on the coarse
+    grid, or the others on the N points)."""
+
+    forces: Callable[..., None]
+    jacobian: Callable[..., None]
+    has_terms: bool
+    order: int
+    has_bot: bool
+    bot_forces: Callable[..., None]
+    bot_hessians: Callable[..., None]
+
+
+def _group(terms: list, coarse: bool) -> _Group:
+    """The compiled grid module of ``templates/grid.py`` for ``terms`` (the coarse
+    grid is always scanned; the others are unless every term has an analytic Hessian),
+    with the terms' energies of the bot alone (stubs when there are none)."""
+    grid_module = compile_module(
+        "rodas4-grid",
+        template(__package__ + ".templates", "grid.py"),
+        {
+            "partials": compose_partials([t.partials_kernel() for t in terms]),
+            "hessian": compose_hessians(terms),
+            "SCAN": coarse or any(t.hessian_kernel() is None for t in terms),
+        },
+        _names(terms),
+    )
+    has_bot = any(t.has_bot_energy for t in terms)
+    bot_forces, bot_hessians = (
+        compose_bot(terms)
+        if has_bot
+        else (placeholders.no_bot_forces, placeholders.no_bot_hessians)
+    )
+    return _Group(
+        forces=grid_module.forces,
+        jacobian=grid_module.grid_jacobian,
+        has_terms=bool(terms),
+        order=max([t.derivative_order for t in terms], default=0),
+        has_bot=has_bot,
+        bot_forces=bot_forces,
+        bot_hessians=bot_hessians,
+    )
+
+
+def compiled_loop(model: Model) -> tuple:
+    """(rhs, jacobian, integrate) compiled for the model's terms and drive: generated modules
+    from ``templates/grid.py`` (once per group of terms) and
+    ``templates/loop.py``, cached on disk (:mod:`softcell.engine.compiled`), with
+    the model's friction law when it is nonlinear
+    (:mod:`softcell.engine.nonlinear_friction`)."""
+    smooth_terms, other_terms = ([t for _, t in group] for group in groups(model))
+    smooth = _group(smooth_terms, coarse=True)
+    other = _group(other_terms, coarse=False)
+    law = nonlinear_friction.compiled_friction(model.friction) if model.nonlinear_friction else None
+    loop = compile_module(
+        "rodas4-loop",
+        template(__package__ + ".templates", "loop.py"),
+        {
+            "forces_s": smooth.forces,
+            "jacobian_s": smooth.jacobian,
+            "HAS_S": smooth.has_terms,
+            "ORDER_S": smooth.order,
+            "HAS_BOT_S": smooth.has_bot,
+            "bot_forces_s": smooth.bot_forces,
+            "bot_hessians_s": smooth.bot_hessians,
+            "forces_f": other.forces,
+            "jacobian_f": other.jacobian,
+            "HAS_F": other.has_terms,
+            "ORDER_F": other.order,
+            "HAS_BOT_F": other.has_bot,
+            "bot_forces_f": other.bot_forces,
+            "bot_hessians_f": other.bot_hessians,
+            "drive": model.drive,
+            "drive_jacobian": fd_drive_jacobian(model.drive),
+            "event": model.event if model.event is not None else placeholders.no_event,
+            "HAS_EVENT": model.event is not None,
+            "LAW": law is not None,
+            "friction_velocity": law.velocity if law else placeholders.no_friction_velocity,
+            "friction_jacobian": law.jacobian if law else placeholders.no_friction_jacobian,
+        },
+        f"{_names(model.terms)}; {model.protocol.name}"
+        + (f"; {model.friction.name}" if law else ""),
+    )
+    return loop.rhs, loop.jacobian, loop.integrate
+
+
+def compiled_group(model: Model):
+    """The group loop of ``templates/group.py`` (``advance_group``) for the model's
+    components: several cells and their membrane-membrane contact, stepped together."""
+    if model.nonlinear_friction:
+        raise ParameterError(
+            "friction_law",
+            model.friction.name,
+            "must be viscous for an assembly of cells (the pair forces move the membrane "
+            "by its linear mobility)",
+            "1",
+        )
+    if not model.pair_terms:
+        raise ParameterError(
+            "pair_terms", "[]", "must name at least one pair term for an assembly", "1"
+        )
+    if model.event is not None:
+        raise ParameterError(
+            "driving_protocol",
+            model.protocol.name,
+            "must have no state events for an assembly of cells (the group loop does not "
+            "locate them yet)",
+            "1",
+        )
+    rhs, jacobian, _ = compiled_loop(model)
+    module = compile_module(
+        "rodas4-group",
+        template(__package__ + ".templates", "group.py"),
+        {"rhs": rhs, "jacobian": jacobian, "pair_law": compose_pair_laws(model.pair_terms)},
+        f"{_names(model.terms)}; {model.protocol.name}; pairs {_names(model.pair_terms)}",
+    )
+    return module.advance_group
+
+
+class GroupWork(NamedTuple):
+    """Scratch arrays of the group loop for G cells of nu unknowns each."""
+
+    jac: np.ndarray
+    mat: np.ndarray
+    pivots: np.ndarray
+    k: np.ndarray
+    f0: np.ndarray
+    y: np.ndarray
+    ynew: np.ndarray
+    force: np.ndarray
+    scratch: np.ndarray
+    phases: np.ndarray
+    data: np.ndarray
+
+
+class PairWork(NamedTuple):
+    """What the pair forces read: the members' points ``z`` (complex128[G, N], cm), scratch
+    ``modes`` and ``spec``, the image ``shifts`` (float64[G, G, 2], cm), the ``contacts``
+    table, ``constants`` = [the pair terms' reach (cm), the membrane's mobility, the
+    difference step of hess rho (cm)], ``twiddle`` = exp(-2 pi i n / N) and ``laws``, the
+    pair terms' coefficient arrays."""
+
+    z: np.ndarray
+    modes: np.ndarray
+    spec: np.ndarray
+    shifts: np.ndarray
+    contacts: np.ndarray
+    constants: np.ndarray
+    twiddle: np.ndarray
+    laws: tuple
+
+
+def group_work(model: Model, cells: int) -> tuple[GroupWork, PairWork]:
+    """The group loop's scratch arrays for ``cells`` cells of ``model``."""
+    m = 2 * model.cutoff + 1
+    nu = 2 * m + 3
+    size = cells * nu
+    n = model.nodes
+    reach = model.pair_reach
+    # hess rho varies on the scale of the distance itself; the step is 1e-6 of the reach
+    constants = np.array([reach, model.membrane_mobility, 1e-6 * reach])
+    work = GroupWork(
+        jac=np.zeros((size, size)),
+        mat=np.zeros((size, size)),
+        pivots=lu_workspace(size, transposed=True),
+        k=np.zeros((6, size)),
+        f0=np.zeros(size),
+        y=np.zeros(size),
+        ynew=np.zeros(size),
+        force=np.zeros(size),
+        scratch=np.zeros(nu),
+        phases=np.zeros(cells, dtype=np.int8),
+        data=np.zeros(cells),
+    )
+    pair = PairWork(
+        z=np.zeros((cells, n), np.complex128),
+        modes=np.zeros(m, np.complex128),
+        spec=np.zeros(n, np.complex128),
+        shifts=np.zeros((cells, cells, 2)),
+        contacts=np.zeros((4 * n * cells, 4), np.int64),
+        constants=constants,
+        twiddle=np.exp(-2j * np.pi * np.arange(n) / n),
+        laws=tuple(np.ascontiguousarray(t.coefficients()) for t in model.pair_terms),
+    )
+    return work, pair
+
+
+def group_coefficients(model: Model) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+    """The terms' coefficient arrays, split like :func:`groups`."""
+    out = []
+    for group in groups(model):
+        out.append(tuple(model.coefficients[i] for i, _ in group) or (np.zeros(1),))
+    return out[0], out[1]
+
+
+def pack(modes: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """The unknowns as one float64 vector: Re g, Im g (cm), then x, y (cm), heading (rad)."""
+    return np.concatenate([modes.real, modes.imag, pose]).astype(np.float64)
+
+
+def unpack(u: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`pack`: modes (complex128[m]) and pose (float64[3])."""
+    return u[:m] + 1j * u[m : 2 * m], u[2 * m : 2 * m + 3].copy()
+
+
+_NO_EVENTS = np.zeros(0)
+_NO_COUNT = np.zeros(1, dtype=np.int64)
+
+
+def _rewind(state: dict, schedule: Schedule) -> None:
+    """Bring a cell's state back to its last sample (``state["time"]``) if its steps ran
+    ahead of it (rodas4 samples its continuous extension): the state there, its phase then,
+    and the next step tried from there."""
+    t = float(state["time"][0])
+    clock = state["clock"]
+    if clock[T] <= t + 1e-12 * (1.0 + abs(t)):
+        return
+    state["u"][:] = pack(state["modes"], state["pose"])
+    clock[T] = t
+    clock[H_LAST] = 0.0
+    state["phase_index"][0] = int(np.searchsorted(schedule.start, t, side="right")) - 1
+
+
+_GROUP_FAILURES = {
+    STEP_UNDERFLOW: "the step size underflowed",
+    SINGULAR: "the iteration matrix is singular",
+    3: "more membrane contacts than the contact table holds (membranes overlapping)",
+}
+
+
+class Rodas4Stepper(Stepper):
+    def __init__(
+        self,
+        model: Model,
+        atol: float,
+        rtol: float,
+        max_step: float,
+        first_step: float,
+        smooth_nodes: int,
+    ) -> None:
+        self.model = model
+        self.rhs, self.jacobian, self.integrate = compiled_loop(model)
+        self.ws = workspace(model, min(smooth_nodes, model.nodes))
+        self.coefficients = group_coefficients(model)
+        self.problem = Problem(
+            self.coefficients,
+            model.context,
+            model.drive_coefficients,
+            nonlinear_friction.mobility(model),
+            model.bot_mobility,
+            model.has_membrane,
+        )
+        self.atol, self.rtol, self.max_step, self.first_step = atol, rtol, max_step, first_step
+        self._group = None  # the group loop, compiled on first use
+        self._group_work: dict[int, tuple[GroupWork, PairWork]] = {}
+
+    def start(self, modes, pose, schedule):
+        u = pack(np.asarray(modes, dtype=np.complex128), np.asarray(pose, dtype=np.float64))
+        clock = np.zeros(7)
+        clock[H_NEXT] = self.first_step
+        clock[ERR_ACCEPTED] = 1.0
+        return {
+            "modes": np.asarray(modes, dtype=np.complex128).copy(),
+            "pose": np.asarray(pose, dtype=np.float64).copy(),
+            "time": np.zeros(1),
+            "u": u,
+            "clock": clock,
+            "phase_index": np.zeros(1, dtype=np.int64),
+            "counters": np.zeros(4, dtype=np.int64),
+            "dense": np.zeros((4, u.size)),
+            **event_state(self.model, schedule),
+        }
+
+    def advance(self, state, schedule: Schedule, t_end: float) -> None:
+        self.sample(state, schedule, np.array([t_end], dtype=np.float64))
+
+    def current(self, state) -> tuple[np.ndarray, np.ndarray, float]:
+        """The last accepted step's modes (cm), pose (cm, cm, rad) and time (s), which run
+        ahead of ``modes`` and ``pose`` (the last sample's) when a step fails."""
+        size = 2 * self.model.cutoff + 1
+        u = state["u"]
+        return u[:size] + 1j * u[size : 2 * size], u[2 * size :].copy(), float(state["clock"][T])
+
+    def sample(self, state, schedule: Schedule, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        m = self.model
+        times = np.ascontiguousarray(times, dtype=np.float64)
+        samples = np.empty((times.size, state["u"].size))
+        status = self.integrate(
+            LoopState(
+                state["u"], state["clock"], state["phase_index"], state["counters"], state["dense"]
+            ),
+            times,
+            samples,
+            PhaseTable(state.get("starts", schedule.start), schedule.phase, schedule.data),
+            self.problem,
+            Control(self.atol, self.rtol, self.max_step),
+            Coefficients(RODAS4.a, RODAS4.c, RODAS4.dense),
+            self.ws,
+            EventLog(state.get("event_times", _NO_EVENTS), state.get("event_count", _NO_COUNT)),
+        )
+        if status != OK:
+            t = state["clock"][T]
+            reason = (
+                "the step size underflowed"
+                if status == STEP_UNDERFLOW
+                else "the iteration matrix is singular"
+            )
+            raise SimulationError(f"rodas4 failed at t = {t:.9g} s: {reason}")
+        size = 2 * m.cutoff + 1
+        modes = samples[:, :size] + 1j * samples[:, size : 2 * size]
+        pose = samples[:, 2 * size :]
+        state["modes"][:], state["pose"][:] = modes[-1], pose[-1]
+        state["time"][0] = times[-1]
+        return modes, pose
+
+    def advance_cells(
+        self,
+        states: list[dict],
+        schedules: list[Schedule],
+        shifts: np.ndarray,
+        t_end: float,
+        rewind: bool = True,
+    ) -> None:
+        """Advance cells in contact together to ``t_end`` (s): ``states`` (each cell's, from
+        :meth:`start`, at one time) and ``schedules`` are the members', ``shifts``
+        (float64[G, G, 2], cm) the image shift of member d's points seen from member c. The
+        group's steps land on every member's switches; afterwards each member's state holds
+        the group's clock and its own slice of the last step's continuous extension.
+        ``rewind`` brings every member back to its last sample first (steps of a cell alone,
+        or of another group, may have run ahead of it); False continues a group that stepped
+        together over the last interval from where its steps stopped."""
+        if self._group is None:
+            self._group = compiled_group(self.model)
+        g = len(states)
+        if g not in self._group_work:
+            self._group_work[g] = group_work(self.model, g)
+        work, pair = self._group_work[g]
+        pair.shifts[:] = shifts
+        nu = states[0]["u"].size
+        if rewind:
+            for s, schedule in zip(states, schedules, strict=True):
+                _rewind(s, schedule)
+        u = np.concatenate([s["u"] for s in states])
+        clock = states[0]["clock"].copy()
+        clock[H_NEXT] = min(s["clock"][H_NEXT] for s in states)
+        clock[H_ACCEPTED] = 0.0  # no step of this group to predict from yet
+        p = np.array([s["phase_index"][0] for s in states], dtype=np.int64)
+        counters = np.zeros(4, dtype=np.int64)
+        dense = np.concatenate([s["dense"] for s in states], axis=1)
+        offsets = np.cumsum([0] + [len(s.start) for s in schedules])
+        table = (
+            np.concatenate([s.start for s in schedules]),
+            np.concatenate([s.phase for s in schedules]),
+            np.concatenate([s.data for s in schedules]),
+            offsets.astype(np.int64),
+        )
+        sample = np.empty(u.size)
+        status = self._group(
+            LoopState(u, clock, p, counters, dense),
+            float(t_end),
+            sample,
+            table,
+            self.problem,
+            Control(self.atol, self.rtol, self.max_step),
+            Coefficients(RODAS4.a, RODAS4.c, RODAS4.dense),
+            self.ws,
+            work,
+            pair,
+        )
+        if status != OK:
+            raise SimulationError(
+                f"rodas4 failed on a group of {g} cells at t = {clock[T]:.9g} s: "
+                + _GROUP_FAILURES.get(status, f"status {status}")
+            )
+        size = 2 * self.model.cutoff + 1
+        for c, s in enumerate(states):
+            part = slice(c * nu, (c + 1) * nu)
+            s["u"][:] = u[part]
+            s["clock"][:] = clock
+            s["phase_index"][0] = p[c]
+            s["counters"] += counters
+            s["dense"][:] = dense[:, part]
+            s["modes"][:] = sample[part][:size] + 1j * sample[part][size : 2 * size]
+            s["pose"][:] = sample[part][2 * size :]
+            s["time"][0] = t_end
+
+    def statistics(self, state) -> dict[str, int]:
+        """Steps accepted and rejected, right-hand-side and Jacobian evaluations so far."""
+        c = state["counters"]
+        return {
+            "steps": int(c[STEPS]),
+            "rejected": int(c[REJECTED]),
+            "rhs_calls": int(c[RHS_CALLS]),
+            "jacobians": int(c[JACOBIANS]),
+        }
+
+
+class Rodas4(Integrator):
+    """Adaptive linearly implicit RODAS4 (order 4(3), L-stable) on the whole coupled system."""
+
+    name = "rodas4"
+    #: Steps groups of cells in contact together (:meth:`Rodas4Stepper.advance_cells`).
+    steps_groups = True
+    description = (
+        "adaptive Rosenbrock RODAS4, order 4(3), full Jacobian, steps on the "
+        "protocol's switches, dense output"
+    )
+    parameters = (
+        ParameterSpec(
+            "atol",
+            3e-6,
+            "cm",
+            "absolute error tolerance of rodas4 per step "
+            "(cm for positions and modes, rad for the heading)",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "rtol", 3e-6, "1", "relative error tolerance of rodas4 per step", minimum=0.0
+        ),
+        ParameterSpec("max_step", 0.2, "s", "largest step of rodas4", minimum=0.0),
+        ParameterSpec("first_step", 1e-4, "s", "first trial step of rodas4", minimum=0.0),
+        ParameterSpec(
+            "smooth_nodes",
+            128,
+            "1",
+            "collocation points of rodas4's coarse grid for smooth energy terms (bending, tension)",
+            kind=int,
+            minimum=8,
+            minimum_inclusive=True,
+            power_of_two=True,
+        ),
+    )
+
+    @classmethod
+    def check(cls, params):
+        lc, smooth = int(params.cutoff), int(params.smooth_nodes)
+        if smooth < 4 * lc and smooth < int(params.nodes):
+            raise ParameterError(
+                "smooth_nodes",
+                smooth,
+                f"must be >= 4 cutoff = {4 * lc} (or "
+                f">= nodes) so that the smooth terms' forces are not aliased",
+                "1",
+            )
+
+    def build(self, model: Model) -> Rodas4Stepper:
+        p = self.params
+        return Rodas4Stepper(
+            model,
+            float(p.atol),
+            float(p.rtol),
+            float(p.max_step),
+            float(p.first_step),
+            int(p.smooth_nodes),
+        )
+
+
+@hookimpl
+def softcell_integrators() -> list[type[Integrator]]:
+    return [Rodas4]

@@ -1,2 +1,0 @@
-"""Sources of generated modules (:mod:`softcell.core.engine.compiled`), read as text and never
-imported: the names they use without defining are bound by the code that compiles them."""

@@ -1,2 +1,0 @@
-"""Orchestration: ensembles with files, checkpoints and dask; the whole paper; the experimental
-pipeline; findings and the report."""
