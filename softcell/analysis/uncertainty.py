@@ -32,6 +32,8 @@ import numpy as np
 import xarray as xr
 
 from softcell.analysis import fits
+from softcell.schema import BODY_QUANTITIES as BODY_QUANTITIES  # the quantities estimated here
+from softcell.schema import POINT_QUANTITIES as POINT_QUANTITIES
 
 #: Resamples of the realizations per sweep point (the analysis option ``resamples``).
 RESAMPLES = 1000

@@ -194,12 +194,19 @@ class Registry:
             self._skip(ep.name, origin, exc)
 
     def _plugin_components(self, plugin: object) -> dict[str, list[type[Component]]]:
+        """The components ``plugin`` returns from each hook, called through pluggy's hook
+        relay of a manager holding this plugin alone (so that each component keeps its
+        origin and a broken plugin is skipped alone)."""
         found: dict[str, list[type[Component]]] = {}
+        alone = pluggy.PluginManager(ENTRY_POINT_GROUP)
+        alone.add_hookspecs(hookspecs)
+        alone.register(plugin)
         for hook_name, contract in CONTRACTS.items():
-            for impl in getattr(self.pm.hook, hook_name).get_hookimpls():
-                if impl.plugin is not plugin:
-                    continue
-                result = impl.function()
+            hook = getattr(alone.hook, hook_name)
+            results = hook()
+            if len(results) < len(hook.get_hookimpls()):  # pluggy drops the results None
+                raise TypeError(f"{hook_name} returned NoneType, not a list")
+            for result in results:
                 if not isinstance(result, list | tuple):
                     raise TypeError(f"{hook_name} returned {type(result).__name__}, not a list")
                 for cls in result:

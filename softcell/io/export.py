@@ -29,6 +29,7 @@ import xarray as xr
 
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
+from softcell.io.files import gsd_attributes as gsd_attributes  # read here, kept with the files
 
 #: The GSD particle types, in order of their type ids.
 TYPES = ("membrane", "bot")
