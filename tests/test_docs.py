@@ -156,3 +156,17 @@ def test_the_units_check_reads_the_numpydoc_sections():
         "Parameters 'radius'",
         "Returns 'ndarray'",
     ]
+
+
+def test_the_module_map_is_made_from_the_docstrings():
+    """docs/architecture.md lists every module with its docstring's first sentence (rerun
+    ``python docs/module_map.py`` after adding, moving or describing a module)."""
+    import importlib.util
+
+    root = Path(__file__).parents[1]
+    spec = importlib.util.spec_from_file_location("module_map", root / "docs" / "module_map.py")
+    module_map = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module_map)
+    page = module_map.PAGE.read_text(encoding="utf-8")
+    assert page == module_map.page_with_map(page)
+    assert "`softcell/integrators/rodas4/templates/loop.py`" in page
