@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 from typing import Any
 
 from softcell.cli import flags
@@ -59,26 +58,21 @@ def _add_study(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
+    from softcell.studies import grid_studies
     from softcell.studies.sensitivity import VARIANTS, sensitivity, variants_named
 
-    if args.study in GRID_STUDIES:
-        return _cmd_grid_study(args)
-    flags = (*GRID_FLAGS, *(f for _, own in GRID_STUDIES.values() for f in own))
-    given = [f for f in flags if getattr(args, f)]
+    grids = grid_studies()
+    if args.study in grids:
+        return _grid_study(args, grids)
+    given = [f for f in (*GRID_FLAGS, *_own_flags(grids)) if getattr(args, f)]
     if given:
-        owners = [s for s, (_, own) in GRID_STUDIES.items() if given[0] in own] or list(
-            GRID_STUDIES
-        )
+        owners = [s for s, study in grids.items() if given[0] in study.flags] or list(grids)
         raise SoftcellError(
             f"--{given[0]} belongs to "
             + " or ".join(f"'study {s}'" for s in owners)
             + "; 'study sensitivity' runs the quick design"
         )
-    variants = (
-        VARIANTS
-        if args.only is None
-        else variants_named([n.strip() for n in args.only.split(",") if n.strip()])
-    )
+    variants = VARIANTS if args.only is None else variants_named(flags.names(args.only))
     report = sensitivity(
         args.output,
         seed=args.seed,
@@ -92,67 +86,49 @@ def _cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
-#: The grid studies: each one's module, and the flags that belong to it alone.
-GRID_STUDIES = {
-    "constriction": ("softcell.studies.constriction", ("gaps",)),
-    "crowding": ("softcell.studies.crowding", ("fractions", "cells")),
-    "strategies": ("softcell.studies.locomotion", ("strategies",)),
-}
-
-
 #: Flags every grid study takes over its design.
 GRID_FLAGS = ("quick", "radii", "realizations", "duration")
 
 
-#: The flags that belong to one grid study alone.
-OWN_FLAGS = tuple(f for _, own in GRID_STUDIES.values() for f in own)
+def _own_flags(grids: dict[str, Any]) -> tuple[str, ...]:
+    """The flags that belong to one grid study alone."""
+    return tuple(f for study in grids.values() for f in study.flags)
 
 
-def _grid_changes(args: argparse.Namespace, own: tuple[str, ...]) -> dict[str, Any]:
-    """The design fields the grid flags given change (lists as tuples), for a study whose
-    own flags are ``own``."""
+def _grid_changes(args: argparse.Namespace, study: Any, grids: dict[str, Any]) -> dict[str, Any]:
+    """The design fields of ``study`` that the grid flags given change (lists as tuples)."""
     changes = {
         "radii": flags.numbers("--radii", args.radii),
         "gaps": flags.numbers("--gaps", args.gaps),
         "fractions": flags.numbers("--fractions", args.fractions),
         "cells": args.cells,
-        "strategies": None
-        if args.strategies is None
-        else [n.strip() for n in args.strategies.split(",") if n.strip()],
+        "strategies": flags.names(args.strategies),
         "realizations": args.realizations,
         "duration": args.duration,
     }
+    others = _own_flags(grids)
     return {
         k: tuple(v) if isinstance(v, list) else v
         for k, v in changes.items()
-        if v is not None and (k in own or k not in OWN_FLAGS)
+        if v is not None and (k in study.flags or k not in others)
     }
 
 
-def _cmd_grid_study(args: argparse.Namespace) -> int:
+def _grid_study(args: argparse.Namespace, grids: dict[str, Any]) -> int:
     """``softcell study constriction``, ``crowding`` or ``strategies``: the full or quick
     grid, changed by the grid flags given."""
-    from softcell.studies import constriction, crowding, locomotion
-
-    own = GRID_STUDIES[args.study][1]
+    study = grids[args.study]
     if args.only is not None:
         raise SoftcellError(f"--only names sensitivity variants; 'study {args.study}' has none")
     foreign = [
-        f for s, (_, flags) in GRID_STUDIES.items() if s != args.study for f in flags
+        f for other in grids.values() if other is not study for f in other.flags
         if getattr(args, f) is not None
     ]  # fmt: skip
     if foreign:
         raise SoftcellError(f"--{foreign[0]} does not belong to 'study {args.study}'")
-    module = {"constriction": constriction, "crowding": crowding, "strategies": locomotion}[
-        args.study
-    ]
-    design = module.QUICK if args.quick else module.FULL
-    changes = _grid_changes(args, own)
-    if changes:
-        design = replace(design, name=f"{design.name}, changed", **changes)
-    report = getattr(module, args.study)(
+    report = study.run(
         args.output,
-        design=design,
+        design=study.design(args.quick, **_grid_changes(args, study, grids)),
         seed=args.seed,
         workers=args.workers,
         overwrite=args.overwrite,

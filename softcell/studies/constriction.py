@@ -25,17 +25,17 @@ the radii share their random drive (common random numbers).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from softcell.errors import SoftcellError
+from softcell.studies.protocol import GridStudy
 
 #: Side of each square chamber, in cell radii R.
 CHAMBER = 3.0
@@ -226,32 +226,16 @@ def constriction(
         (checked for every radius before anything runs), or a directory another study or
         seed made.
     """
-    from softcell.io.files import check_output
-    from softcell.studies.variants import own_parameters, run_points
-
-    design.check()
-    parameters = own_parameters(
-        parameters,
-        "constriction",
-        ("radius", "duration", "obstacles", "sample_every", "sample_every_late"),
-    )
-    out = check_output(Path(out), "report", directory=True)
-    points = {
-        _folder(out, r): (f"R = {r:g} cm, {len(design.gaps)} gaps", _config(design, r, parameters))
-        for r in design.radii
-    }
-    run_points(
+    return STUDY.run(
         out,
-        points,
-        command="study constriction",
-        realizations=design.realizations,
+        design=design,
         seed=seed,
         workers=workers,
+        parameters=parameters,
         overwrite=overwrite,
         progress=progress,
         log=log,
     )
-    return summarize(out, design, seed, parameters)
 
 
 # -- what the runs measured ---------------------------------------------------------------------
@@ -345,40 +329,6 @@ def transmission(point: dict[str, Any], reference: dict[str, Any] | None) -> dic
     return {**none, "transmission": ratio, "transmission_sem": ratio * math.hypot(*relative)}
 
 
-def summarize(
-    out: Path, design: ConstrictionDesign, seed: int, parameters: dict[str, Any] | None = None
-) -> Path:
-    """``constriction.json``, ``constriction.png`` and ``constriction.md`` in ``out`` from
-    its runs (made with the model ``parameters`` over the defaults); returns the markdown's
-    path."""
-    from softcell._version import __version__
-    from softcell.io.files import atomic_write
-    from softcell.model.parameters import MODEL_PARAMETERS
-    from softcell.studies.figures import constriction_figure
-
-    points = measure(out, design)
-    parameters = dict(parameters or {})
-    semi_minor = parameters.get("bot_semi_minor", MODEL_PARAMETERS["bot_semi_minor"].default)
-    bot_width = 2 * float(semi_minor)
-    result = {
-        "study": "constriction",
-        "design": asdict(design),
-        "seed": seed,
-        "version": __version__,
-        "parameters": parameters,
-        "geometry": {"chamber_R": CHAMBER, "wall_R": WALL, "band_R": BAND, "open_gap": OPEN},
-        "bot_width_cm": bot_width,
-        "points": points,
-    }
-    with atomic_write(out / "constriction.json") as tmp:
-        tmp.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
-    caption = constriction_figure(out / "constriction.png", points, design.radii, OPEN, bot_width)
-    md = out / "constriction.md"
-    with atomic_write(md) as tmp:
-        tmp.write_text(_markdown(result, caption), encoding="utf-8")
-    return md
-
-
 def _rate_text(point: dict[str, Any]) -> str:
     if point["rate_upper_95"] is not None:
         return f"0 (< {point['rate_upper_95']:.2g} at 95 %)"
@@ -435,3 +385,49 @@ def _markdown(result: dict[str, Any], caption: str) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+class Constriction(GridStudy):
+    """The constriction study in the study protocol
+    (:class:`~softcell.studies.protocol.GridStudy`)."""
+
+    name = "constriction"
+    designs = {"quick": QUICK, "full": FULL}
+    own = ("radius", "duration", "obstacles", "sample_every", "sample_every_late")
+    flags = ("gaps",)
+
+    def points(self, out, design, parameters):
+        return {
+            _folder(out, r): (
+                f"R = {r:g} cm, {len(design.gaps)} gaps",
+                _config(design, r, parameters),
+            )
+            for r in design.radii
+        }
+
+    def measure(self, out, design):
+        return measure(out, design)
+
+    def context(self, design, parameters):
+        from softcell.model.parameters import MODEL_PARAMETERS
+
+        semi_minor = parameters.get("bot_semi_minor", MODEL_PARAMETERS["bot_semi_minor"].default)
+        return {
+            "geometry": {"chamber_R": CHAMBER, "wall_R": WALL, "band_R": BAND, "open_gap": OPEN},
+            "bot_width_cm": 2 * float(semi_minor),
+        }
+
+    def figure(self, path, result, design):
+        from softcell.studies.figures import constriction_figure
+
+        return constriction_figure(
+            path, result["points"], design.radii, OPEN, result["bot_width_cm"]
+        )
+
+    def page(self, result, caption):
+        return _markdown(result, caption)
+
+
+STUDY = Constriction()
+#: The summary of a constriction study's folder (see :meth:`GridStudy.summarize`).
+summarize = STUDY.summarize

@@ -17,15 +17,15 @@ the points share their random drives, point by point and cell by cell.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from softcell.errors import SoftcellError
+from softcell.studies.protocol import GridStudy
 
 #: Smallest starting gap between rings (cm): the densest lattice of the full grid
 #: (phi = 0.7 at R = 5 cm) leaves 0.59 cm.
@@ -191,31 +191,16 @@ def crowding(
         lattice that does not fit its box (checked for every point before anything runs),
         or a directory another study or seed made.
     """
-    from softcell.io.files import check_output
-    from softcell.studies.variants import own_parameters, run_points
-
-    design.check()
-    parameters = own_parameters(parameters, "crowding", ("radius", "duration"))
-    out = check_output(Path(out), "report", directory=True)
-    points = {
-        _folder(out, radius, phi): (
-            f"R = {radius:g} cm, " + ("alone" if phi is None else f"area fraction {phi:g}"),
-            config,
-        )
-        for (radius, phi), config in _configs(design, parameters).items()
-    }
-    run_points(
+    return STUDY.run(
         out,
-        points,
-        command="study crowding",
-        realizations=design.realizations,
+        design=design,
         seed=seed,
         workers=workers,
+        parameters=parameters,
         overwrite=overwrite,
         progress=progress,
         log=log,
     )
-    return summarize(out, design, seed, parameters)
 
 
 # -- what the runs measured ---------------------------------------------------------------------
@@ -247,35 +232,6 @@ def measure(out: Path, design: CrowdingDesign) -> list[dict[str, Any]]:
             else:  # a study stopped before this point finished (summarize called alone)
                 points.append({**point, "missing": True})
     return points
-
-
-def summarize(
-    out: Path, design: CrowdingDesign, seed: int, parameters: dict[str, Any] | None = None
-) -> Path:
-    """``crowding.json``, ``crowding.png`` and ``crowding.md`` in ``out`` from its runs
-    (made with the model ``parameters`` over the defaults); returns the markdown's path."""
-    from softcell._version import __version__
-    from softcell.io.files import atomic_write
-    from softcell.studies.figures import crowding_figure
-
-    points = measure(out, design)
-    result = {
-        "study": "crowding",
-        "design": asdict(design),
-        "seed": seed,
-        "version": __version__,
-        "parameters": dict(parameters or {}),
-        "gap_cm": GAP,
-        "discard_s": DISCARD,
-        "points": points,
-    }
-    with atomic_write(out / "crowding.json") as tmp:
-        tmp.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
-    crowding_figure(out / "crowding.png", points, design.radii)
-    md = out / "crowding.md"
-    with atomic_write(md) as tmp:
-        tmp.write_text(_markdown(result), encoding="utf-8")
-    return md
 
 
 def _pm(point: dict[str, Any], key: str, spec: str) -> str:
@@ -317,3 +273,40 @@ def _markdown(result: dict[str, Any]) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+class Crowding(GridStudy):
+    """The crowding study in the study protocol (:class:`~softcell.studies.protocol.GridStudy`)."""
+
+    name = "crowding"
+    designs = {"quick": QUICK, "full": FULL}
+    flags = ("fractions", "cells")
+
+    def points(self, out, design, parameters):
+        return {
+            _folder(out, radius, phi): (
+                f"R = {radius:g} cm, " + ("alone" if phi is None else f"area fraction {phi:g}"),
+                config,
+            )
+            for (radius, phi), config in _configs(design, parameters).items()
+        }
+
+    def measure(self, out, design):
+        return measure(out, design)
+
+    def context(self, design, parameters):
+        return {"gap_cm": GAP, "discard_s": DISCARD}
+
+    def figure(self, path, result, design):
+        from softcell.studies.figures import crowding_figure
+
+        crowding_figure(path, result["points"], design.radii)
+        return ""
+
+    def page(self, result, caption):
+        return _markdown(result)
+
+
+STUDY = Crowding()
+#: The summary of a crowding study's folder (see :meth:`GridStudy.summarize`).
+summarize = STUDY.summarize

@@ -14,15 +14,15 @@ points of one strategy share their random drives across radii.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from softcell.errors import SoftcellError
+from softcell.studies.protocol import GridStudy
 
 #: Seconds dropped at the start of each realization before the analysis (s).
 DISCARD = 15.0
@@ -152,35 +152,16 @@ def strategies(
         a bad parameter (checked for every point before anything runs), or a directory
         another study or seed made.
     """
-    from softcell.io.files import check_output
-    from softcell.model.configuration import RunConfig
-    from softcell.studies.variants import own_parameters, run_points
-
-    design.check()
-    parameters = own_parameters(parameters, "strategies", ("radius", "duration"))
-    out = check_output(Path(out), "report", directory=True)
-    points = {
-        _folder(out, strategy, radius): (
-            f"{strategy}, R = {radius:g} cm",
-            RunConfig(
-                parameters={**parameters, "radius": radius, "duration": design.duration}
-            ).updated(components={"driving_protocol": strategy}),
-        )
-        for strategy in design.strategies
-        for radius in design.radii
-    }
-    run_points(
+    return STUDY.run(
         out,
-        points,
-        command="study strategies",
-        realizations=design.realizations,
+        design=design,
         seed=seed,
         workers=workers,
+        parameters=parameters,
         overwrite=overwrite,
         progress=progress,
         log=log,
     )
-    return summarize(out, design, seed, parameters)
 
 
 # -- what the runs measured ---------------------------------------------------------------------
@@ -227,36 +208,6 @@ def softness_ratios(
         )
         ratios[strategy] = {"ratio": ratio, "sem": error, "from_cm": small, "to_cm": large}
     return ratios
-
-
-def summarize(
-    out: Path, design: StrategiesDesign, seed: int, parameters: dict[str, Any] | None = None
-) -> Path:
-    """``strategies.json``, ``strategies.png`` and ``strategies.md`` in ``out`` from its
-    runs (made with the model ``parameters`` over the defaults); returns the markdown's
-    path."""
-    from softcell._version import __version__
-    from softcell.io.files import atomic_write
-    from softcell.studies.figures import strategies_figure
-
-    points = measure(out, design)
-    result = {
-        "study": "strategies",
-        "design": asdict(design),
-        "seed": seed,
-        "version": __version__,
-        "parameters": dict(parameters or {}),
-        "discard_s": DISCARD,
-        "points": points,
-        "softness": softness_ratios(points, design),
-    }
-    with atomic_write(out / "strategies.json") as tmp:
-        tmp.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
-    strategies_figure(out / "strategies.png", points, design.strategies)
-    md = out / "strategies.md"
-    with atomic_write(md) as tmp:
-        tmp.write_text(_markdown(result), encoding="utf-8")
-    return md
 
 
 def _pm(point: dict[str, Any], key: str, spec: str) -> str:
@@ -317,3 +268,50 @@ def _markdown(result: dict[str, Any]) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+class Strategies(GridStudy):
+    """The strategies study in the study protocol
+    (:class:`~softcell.studies.protocol.GridStudy`)."""
+
+    name = "strategies"
+    designs = {"quick": QUICK, "full": FULL}
+    default = "quick"
+    flags = ("strategies",)
+
+    def points(self, out, design, parameters):
+        from softcell.model.configuration import RunConfig
+
+        return {
+            _folder(out, strategy, radius): (
+                f"{strategy}, R = {radius:g} cm",
+                RunConfig(
+                    parameters={**parameters, "radius": radius, "duration": design.duration}
+                ).updated(components={"driving_protocol": strategy}),
+            )
+            for strategy in design.strategies
+            for radius in design.radii
+        }
+
+    def measure(self, out, design):
+        return measure(out, design)
+
+    def context(self, design, parameters):
+        return {"discard_s": DISCARD}
+
+    def conclusions(self, points, design):
+        return {"softness": softness_ratios(points, design)}
+
+    def figure(self, path, result, design):
+        from softcell.studies.figures import strategies_figure
+
+        strategies_figure(path, result["points"], design.strategies)
+        return ""
+
+    def page(self, result, caption):
+        return _markdown(result)
+
+
+STUDY = Strategies()
+#: The summary of a strategies study's folder (see :meth:`GridStudy.summarize`).
+summarize = STUDY.summarize

@@ -1,0 +1,147 @@
+"""What a grid study is: a design (quick and full), its points, running them, and a summary
+(measurements, a JSON record, a figure and a page).
+
+A study subclasses :class:`GridStudy` and says what is its own: the points of a design, what
+one point measured, the context and conclusions its record carries, its figure and its page.
+Running and summarising are the same for every study: every point is planned before any runs,
+all of them from one root seed on one local cluster (:func:`~softcell.studies.variants.run_points`),
+and the summary is written atomically as ``<name>.json``, ``<name>.png`` and ``<name>.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from dataclasses import asdict, replace
+from pathlib import Path
+from typing import Any, ClassVar
+
+
+class GridStudy:
+    """The protocol of a grid study (``softcell study NAME``).
+
+    Class attributes
+    ----------------
+    name : str
+        The study's name: its command (``softcell study NAME``) and its files.
+    designs : dict of str to design
+        The study's designs by name: ``"quick"`` (a look) and ``"full"``; a design is a
+        frozen dataclass with ``name``, ``radii``, ``realizations``, ``duration`` and a
+        ``check()`` that refuses a grid that cannot run.
+    default : str
+        The design :meth:`run` runs when given none.
+    own : tuple of str
+        The model parameters the study sets itself (refused among the caller's).
+    flags : tuple of str
+        The design's fields that only this study has (``gaps``, ``fractions``, ...), which
+        the command line offers as flags beside ``radii``, ``realizations`` and ``duration``.
+    """
+
+    name: ClassVar[str]
+    designs: ClassVar[dict[str, Any]]
+    default: ClassVar[str] = "full"
+    own: ClassVar[tuple[str, ...]] = ("radius", "duration")
+    flags: ClassVar[tuple[str, ...]] = ()
+
+    # -- what a study says --------------------------------------------------------------------
+
+    def points(
+        self, out: Path, design: Any, parameters: dict[str, Any]
+    ) -> dict[Path, tuple[str, Any]]:
+        """Each point of ``design``: its folder under ``out``, a label for the log and the
+        :class:`~softcell.model.configuration.RunConfig` it runs (with the model
+        ``parameters`` over the defaults)."""
+        raise NotImplementedError
+
+    def measure(self, out: Path, design: Any) -> list[dict[str, Any]]:
+        """What every point of ``design`` in ``out`` measured, as JSON-ready records."""
+        raise NotImplementedError
+
+    def context(self, design: Any, parameters: dict[str, Any]) -> dict[str, Any]:
+        """Settings of the study the record carries before its points (none by default)."""
+        return {}
+
+    def conclusions(self, points: list[dict[str, Any]], design: Any) -> dict[str, Any]:
+        """What the record concludes after its points (none by default)."""
+        return {}
+
+    def figure(self, path: Path, result: dict[str, Any], design: Any) -> str:
+        """Draw the study's figure of ``design`` into ``path`` from its ``result``; its
+        caption ("" when the page writes its own)."""
+        raise NotImplementedError
+
+    def page(self, result: dict[str, Any], caption: str) -> str:
+        """The study's page (Markdown) from its ``result`` and its figure's ``caption``."""
+        raise NotImplementedError
+
+    # -- what every study does ----------------------------------------------------------------
+
+    def design(self, quick: bool, **changes: Any) -> Any:
+        """The quick or the full design, with ``changes`` to its fields (named as changed)."""
+        design = self.designs["quick" if quick else "full"]
+        return replace(design, name=f"{design.name}, changed", **changes) if changes else design
+
+    def run(
+        self,
+        out: str | os.PathLike[str],
+        *,
+        design: Any = None,
+        seed: int = 0,
+        workers: int | None = None,
+        parameters: dict[str, Any] | None = None,
+        overwrite: bool = False,
+        progress: bool = True,
+        log: Callable[[str], None] | None = print,
+    ) -> Path:
+        """Run the study into ``out`` (every point planned first, resumable as ``softcell
+        simulate`` is) and write its summary; returns the page's path. The parameters are
+        those of the study's public function (for example
+        :func:`softcell.studies.crowding.crowding`)."""
+        from softcell.io.files import check_output
+        from softcell.studies.variants import own_parameters, run_points
+
+        design = self.designs[self.default] if design is None else design
+        design.check()
+        parameters = own_parameters(parameters, self.name, self.own)
+        out = check_output(Path(out), "report", directory=True)
+        run_points(
+            out,
+            self.points(out, design, parameters),
+            command=f"study {self.name}",
+            realizations=design.realizations,
+            seed=seed,
+            workers=workers,
+            overwrite=overwrite,
+            progress=progress,
+            log=log,
+        )
+        return self.summarize(out, design, seed, parameters)
+
+    def summarize(
+        self, out: Path, design: Any, seed: int, parameters: dict[str, Any] | None = None
+    ) -> Path:
+        """``<name>.json``, ``<name>.png`` and ``<name>.md`` in ``out`` from its runs (made
+        with the model ``parameters`` over the defaults); returns the page's path."""
+        from softcell._version import __version__
+        from softcell.io.files import atomic_write
+
+        parameters = dict(parameters or {})
+        points = self.measure(out, design)
+        result = {
+            "study": self.name,
+            "design": asdict(design),
+            "seed": seed,
+            "version": __version__,
+            "parameters": parameters,
+            **self.context(design, parameters),
+            "points": points,
+            **self.conclusions(points, design),
+        }
+        with atomic_write(out / f"{self.name}.json") as tmp:
+            tmp.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
+        caption = self.figure(out / f"{self.name}.png", result, design)
+        page = out / f"{self.name}.md"
+        with atomic_write(page) as tmp:
+            tmp.write_text(self.page(result, caption), encoding="utf-8")
+        return page
