@@ -2,7 +2,8 @@
 
 A self-propelled elliptical bot runs and tumbles inside a deformable membrane (Mohapatra,
 Wery et al., "Run and tumble dynamics of a soft robotic cell"). Importing softcell is cheap:
-nothing is compiled and xarray is imported only when a function that needs it is called.
+nothing is compiled, nothing is set, and xarray is imported only when a function that needs
+it is called (when xarray is already imported, the ``ds.softcell`` accessor is registered).
 """
 
 from __future__ import annotations
@@ -12,12 +13,7 @@ from typing import TYPE_CHECKING, Any
 from softcell._version import __version__
 from softcell.components.hookspecs import hookimpl
 from softcell.errors import ConfigError, ParameterError, SchemaError, SoftcellError
-from softcell.io.model_cache import DiskStore
 from softcell.model.parameters import Parameters
-from softcell.settings import use_module_store
-
-# The composed models are kept in the disk cache (core, which writes no file, is handed it).
-use_module_store(DiskStore())
 
 if TYPE_CHECKING:
     from softcell.analysis import analyze

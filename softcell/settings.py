@@ -49,7 +49,11 @@ def progress_bar_class():
     return tqdm
 
 
-_module_stores: list[object] = []
+#: The module whose ``DiskStore`` is the default module store (the compiled-model cache on
+#: disk), imported when a composed model is first placed: importing softcell sets nothing.
+DEFAULT_STORE = "softcell.io.model_cache"
+
+_module_stores: list[object] = []  # empty: the default store, made on first use
 
 
 def use_module_store(store: object) -> None:
@@ -57,8 +61,8 @@ def use_module_store(store: object) -> None:
     ``place(label, key, source, description) -> str`` that stores a generated module's source
     and returns its path (see :class:`softcell.engine.compiled.ModuleStore`), and
     optionally ``cache_kernels()``, called once before the first kernel is compiled, to keep
-    numba's cache files of softcell's own functions too. Importing softcell sets the disk
-    cache of :mod:`softcell.io.model_cache`."""
+    numba's cache files of softcell's own functions too; None compiles composed models in
+    memory, in each process. By default the disk cache of :data:`DEFAULT_STORE` is used."""
     _module_stores[:] = [store]
 
 
@@ -77,6 +81,10 @@ def __getattr__(name: str) -> object:
 
 
 def module_store() -> object | None:
-    """The store set by :func:`use_module_store`, or None (then composed models are compiled
-    in memory, in each process)."""
-    return _module_stores[0] if _module_stores else None
+    """The store set by :func:`use_module_store`, else the default disk store (made on first
+    use); None when composed models are compiled in memory, in each process."""
+    if not _module_stores:
+        import importlib
+
+        _module_stores.append(importlib.import_module(DEFAULT_STORE).DiskStore())
+    return _module_stores[0]

@@ -343,8 +343,8 @@ def test_the_kernels_cache_files_live_in_the_cache_and_are_cleared(tmp_path):
     )
     entry_folder = model_cache.kernel_entry(cache)
     assert entry_folder.name.startswith("kernels-")
-    assert Path(run.stdout.strip()) == entry_folder / "kernels"
-    assert list((entry_folder / "kernels").glob("runs.run_lengths-*.nbi"))
+    assert Path(run.stdout.strip()) == entry_folder / "engine" / "kernels"
+    assert list((entry_folder / "engine" / "kernels").glob("runs.run_lengths-*.nbi"))
     (entry,) = model_cache.entries(cache)
     assert entry.label == model_cache.KERNELS and not entry.stale
     assert model_cache.clear(cache) == 1 and not entry_folder.exists()

@@ -191,12 +191,12 @@ class DiskStore:
 
 
 #: The label of the entry holding numba's cache files of softcell's own compiled functions,
-#: in folders named as the package's (``kernels-<code>/kernels``, ``kernels-<code>/plugins``,
-#: ...). numba checks each file against its own function's source and its own version, not
-#: against the functions it calls in other files (an edit of the ellipse distance would leave
-#: the contact's cached code as it was), so the entry is named by a digest of softcell's
-#: compiled parts: edited code gets a new entry. It is stale when made by another softcell,
-#: numba or code.
+#: in folders named as the package's (``kernels-<code>/engine/kernels``,
+#: ``kernels-<code>/builtins``, ...). numba checks each file against its own function's
+#: source and its own version, not against the functions it calls in other files (an edit of
+#: the ellipse distance would leave the contact's cached code as it was), so the entry is
+#: named by a digest of softcell's compiled parts: edited code gets a new entry. It is stale
+#: when made by another softcell, numba or code.
 KERNELS = "kernels"
 
 _PACKAGE = Path(__file__).resolve().parents[1]

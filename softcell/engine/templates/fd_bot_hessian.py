@@ -4,9 +4,17 @@ its kernel (see :func:`softcell.engine.compose.compose_bot`).
 Bound: ``bot`` (the term's bot kernel), ``LEAN_JIT_FLAGS``. Steps ``steps[6:9]`` (cm, cm, rad); the
 result is *added* to ``hpp``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
+
+from typing import TYPE_CHECKING
 
 from numba import njit
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        bot,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 2
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.

@@ -3,9 +3,17 @@ rad).
 
 Bound: ``drive`` (the protocol's drive kernel), ``LEAN_JIT_FLAGS``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
+
+from typing import TYPE_CHECKING
 
 from numba import njit
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        drive,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 2
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.

@@ -8,9 +8,17 @@ perturbation of component b at *all* points gives column b of every point's Hess
 2 x (6 + 3) kernel calls in all. Steps: ``steps[0:6]`` for w (cm), ``steps[6:9]`` for the
 pose (cm, cm, rad). The results are *added* to ``hww``, ``hwp`` and ``hpp``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
+
+from typing import TYPE_CHECKING
 
 from numba import njit
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        partials,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 2
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.

@@ -6,7 +6,8 @@ the law's derivative kernel, is bound; otherwise central differences of ``law_ve
 ``LEAN_JIT_FLAGS``. ``lw`` is the workspace of
 :func:`softcell.engine.nonlinear_friction.workspace`.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
+
+from typing import TYPE_CHECKING
 
 from numba import njit
 
@@ -17,6 +18,15 @@ from softcell.engine.kernels.friction_modes import (
     shape_field,
     velocity_modes,
 )
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        law_velocity,
+        law_derivative,
+        ANALYTIC,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 4
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.

@@ -8,14 +8,28 @@ some term has an energy of the bot alone; then ``bot_forces`` is their sum), ``e
 ``HAS_EVENT`` (the protocol's event kernel, and whether it has one) and ``JIT_FLAGS`` (its
 functions allocate their scratch arrays, so they keep numba's reference counting).
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
 from softcell.engine.kernels.spectral import assemble, evaluate
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        partials,
+        drive,
+        LAW,
+        friction_velocity,
+        HAS_BOT,
+        bot_forces,
+        event,
+        HAS_EVENT,
+        JIT_FLAGS,
+    ) = (None,) * 9
+
 
 #: The names this template expects the loader to bind (besides the flags); a missing
 #: or an extra binding is an error naming the template.

@@ -6,13 +6,23 @@ Bound: ``partials`` and ``hessian`` (the group's composed kernels), ``SCAN`` (bo
 do (true of the contact, which vanishes beyond its cut-off) and only those points are visited;
 otherwise (the fallback's differences, or a small grid) every point is scanned.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
+
+from typing import TYPE_CHECKING
 
 from numba import njit
 from rocket_fft import c2c
 
 from softcell.engine.kernels.jacobian import SPARSE_POINTS, active_points, assemble_jacobian
 from softcell.engine.kernels.spectral import AXES, assemble, derivative_bins
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        partials,
+        hessian,
+        SCAN,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 4
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.

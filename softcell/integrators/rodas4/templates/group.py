@@ -10,9 +10,9 @@ and ``JIT_FLAGS`` (the pair kernels inlined here allocate their scratch arrays, 
 counts references). Only the viscous friction law: the pair forces move the modes by the
 membrane's mobility.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with JIT_FLAGS)
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -43,6 +43,15 @@ from softcell.integrators.rodas4.method import (
     T,
     step_factor,
 )
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        rhs,
+        jacobian,
+        pair_law,
+        JIT_FLAGS,
+    ) = (None,) * 4
+
 
 #: The names this template expects the loader to bind (besides the flags).
 BOUND = ("rhs", "jacobian", "pair_law")

@@ -13,9 +13,9 @@ and whether it has one), ``LAW`` (whether the friction law is nonlinear; then
 energies of the bot alone; then ``bot_forces_s``/``_f`` and ``bot_hessians_s``/``_f`` are
 their sums, from :func:`softcell.engine.compose.compose_bot`) and ``LEAN_JIT_FLAGS``.
 """
-# ruff: noqa: F821 (the names of BOUND are bound by the loader, with LEAN_JIT_FLAGS)
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -46,6 +46,33 @@ from softcell.integrators.rodas4.method import (
     accumulate,
     step_factor,
 )
+
+if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
+    (
+        forces_s,
+        jacobian_s,
+        HAS_S,
+        ORDER_S,
+        HAS_BOT_S,
+        bot_forces_s,
+        bot_hessians_s,
+        forces_f,
+        jacobian_f,
+        HAS_F,
+        ORDER_F,
+        HAS_BOT_F,
+        bot_forces_f,
+        bot_hessians_f,
+        drive,
+        drive_jacobian,
+        event,
+        HAS_EVENT,
+        LAW,
+        friction_velocity,
+        friction_jacobian,
+        LEAN_JIT_FLAGS,
+    ) = (None,) * 22
+
 
 #: The names this template expects the loader to bind (besides the numba flags); a missing
 #: or an extra binding is an error naming the template.
