@@ -26,8 +26,7 @@ the radii share their random drive (common random numbers).
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -176,66 +175,6 @@ def _config(design: ConstrictionDesign, radius: float, parameters: dict[str, Any
 
 def _folder(out: Path, radius: float) -> Path:
     return out / f"R{radius:g}"
-
-
-def constriction(
-    out: str | os.PathLike[str],
-    *,
-    design: ConstrictionDesign = FULL,
-    seed: int = 0,
-    workers: int | None = None,
-    parameters: dict[str, Any] | None = None,
-    overwrite: bool = False,
-    progress: bool = True,
-    log: Callable[[str], None] | None = print,
-) -> Path:
-    """Run the constriction study into ``out`` and write its summary.
-
-    Parameters
-    ----------
-    out : path-like
-        Results directory: ``R<radius>/`` holds each radius's simulations (one file per gap
-        and realization, resumable as ``softcell simulate``'s are); ``constriction.json``,
-        ``constriction.md`` and ``constriction.png`` the result.
-    design : ConstrictionDesign
-        The grid (default ``FULL``, the grid docs/assemblies.md shows; ``QUICK`` for a look).
-    seed : int
-        Root seed (every radius draws the same streams).
-    workers : int, optional
-        Local worker processes (default: every core).
-    parameters : dict, optional
-        Model parameters over the defaults (units of ``softcell params``); ``radius``,
-        ``duration``, ``obstacles`` and the sampling are the study's.
-    overwrite : bool
-        Recompute what ``out`` holds from another seed, version or request, and write into
-        a non-empty folder the study did not make.
-    progress : bool
-        Show a progress bar per radius, in simulated seconds.
-    log : callable, optional
-        Receives a line per radius and what ``softcell simulate`` reports.
-
-    Returns
-    -------
-    Path
-        ``out / "constriction.md"``.
-
-    Raises
-    ------
-    SoftcellError
-        For a grid that cannot run (:meth:`ConstrictionDesign.check`), a bad parameter
-        (checked for every radius before anything runs), or a directory another study or
-        seed made.
-    """
-    return STUDY.run(
-        out,
-        design=design,
-        seed=seed,
-        workers=workers,
-        parameters=parameters,
-        overwrite=overwrite,
-        progress=progress,
-        log=log,
-    )
 
 
 # -- what the runs measured ---------------------------------------------------------------------
@@ -388,8 +327,14 @@ def _markdown(result: dict[str, Any], caption: str) -> str:
 
 
 class Constriction(GridStudy):
-    """The constriction study in the study protocol
-    (:class:`~softcell.studies.protocol.GridStudy`)."""
+    """The constriction study (``softcell study constriction``) in the study protocol.
+
+    Its folder: ``R<radius>/`` holds each radius's simulations (one file per gap and
+    realization); ``constriction.json``, ``constriction.md`` and ``constriction.png`` the
+    result. The default design is ``FULL`` (the grid docs/assemblies.md shows); ``radius``,
+    ``duration``, ``obstacles`` and the sampling are the study's own parameters. A grid
+    that cannot run is refused by :meth:`ConstrictionDesign.check`.
+    """
 
     name = "constriction"
     designs = {"quick": QUICK, "full": FULL}
@@ -431,3 +376,6 @@ class Constriction(GridStudy):
 STUDY = Constriction()
 #: The summary of a constriction study's folder (see :meth:`GridStudy.summarize`).
 summarize = STUDY.summarize
+#: Run the constriction study into a folder and write its summary (:meth:`GridStudy.run
+#: <softcell.studies.protocol.GridStudy.run>`).
+constriction = STUDY.run

@@ -18,8 +18,6 @@ the points share their random drives, point by point and cell by cell.
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -144,65 +142,6 @@ def _configs(design: CrowdingDesign, parameters: dict[str, Any]) -> dict[tuple, 
     return configs
 
 
-def crowding(
-    out: str | os.PathLike[str],
-    *,
-    design: CrowdingDesign = FULL,
-    seed: int = 0,
-    workers: int | None = None,
-    parameters: dict[str, Any] | None = None,
-    overwrite: bool = False,
-    progress: bool = True,
-    log: Callable[[str], None] | None = print,
-) -> Path:
-    """Run the crowding study into ``out`` and write its summary.
-
-    Parameters
-    ----------
-    out : path-like
-        Results directory: ``R<R>_phi<phi>/`` holds each point's realizations and
-        ``R<R>_alone/`` the lone cell's (resumable as ``softcell simulate``'s are);
-        ``crowding.json``, ``crowding.md`` and ``crowding.png`` the result.
-    design : CrowdingDesign
-        The grid (default ``FULL``, about 12 h on 2 cores; ``QUICK`` for a look).
-    seed : int
-        Root seed (every point draws the same streams).
-    workers : int, optional
-        Local worker processes (default: every core).
-    parameters : dict, optional
-        Model parameters over the defaults (units of ``softcell params``); ``radius`` and
-        ``duration`` are the study's.
-    overwrite : bool
-        Recompute what ``out`` holds from another seed, version or request.
-    progress : bool
-        Show a progress bar per point, in simulated seconds.
-    log : callable, optional
-        Receives a line per point and what ``softcell simulate`` reports.
-
-    Returns
-    -------
-    Path
-        ``out / "crowding.md"``.
-
-    Raises
-    ------
-    SoftcellError
-        For a grid that cannot run (:meth:`CrowdingDesign.check`), a bad parameter or a
-        lattice that does not fit its box (checked for every point before anything runs),
-        or a directory another study or seed made.
-    """
-    return STUDY.run(
-        out,
-        design=design,
-        seed=seed,
-        workers=workers,
-        parameters=parameters,
-        overwrite=overwrite,
-        progress=progress,
-        log=log,
-    )
-
-
 # -- what the runs measured ---------------------------------------------------------------------
 
 
@@ -276,7 +215,14 @@ def _markdown(result: dict[str, Any]) -> str:
 
 
 class Crowding(GridStudy):
-    """The crowding study in the study protocol (:class:`~softcell.studies.protocol.GridStudy`)."""
+    """The crowding study (``softcell study crowding``) in the study protocol.
+
+    Its folder: ``R<R>_phi<phi>/`` holds each point's realizations and ``R<R>_alone/`` the
+    lone cell's; ``crowding.json``, ``crowding.md`` and ``crowding.png`` the result. The
+    default design is ``FULL`` (about 12 h on 2 cores; ``QUICK`` for a look); ``radius``
+    and ``duration`` are the study's own parameters. A grid that cannot run is refused by
+    :meth:`CrowdingDesign.check`, a lattice that does not fit its box when planned.
+    """
 
     name = "crowding"
     designs = {"quick": QUICK, "full": FULL}
@@ -310,3 +256,6 @@ class Crowding(GridStudy):
 STUDY = Crowding()
 #: The summary of a crowding study's folder (see :meth:`GridStudy.summarize`).
 summarize = STUDY.summarize
+#: Run the crowding study into a folder and write its summary (:meth:`GridStudy.run
+#: <softcell.studies.protocol.GridStudy.run>`).
+crowding = STUDY.run

@@ -15,8 +15,6 @@ points of one strategy share their random drives across radii.
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -103,65 +101,6 @@ QUICK = StrategiesDesign(
 
 def _folder(out: Path, strategy: str, radius: float) -> Path:
     return out / f"{strategy}_R{radius:g}"
-
-
-def strategies(
-    out: str | os.PathLike[str],
-    *,
-    design: StrategiesDesign = QUICK,
-    seed: int = 0,
-    workers: int | None = None,
-    parameters: dict[str, Any] | None = None,
-    overwrite: bool = False,
-    progress: bool = True,
-    log: Callable[[str], None] | None = print,
-) -> Path:
-    """Run the strategies study into ``out`` and write its summary.
-
-    Parameters
-    ----------
-    out : path-like
-        Results directory: ``<strategy>_R<R>/`` holds each point's realizations
-        (resumable as ``softcell simulate``'s are); ``strategies.json``,
-        ``strategies.md`` and ``strategies.png`` the result.
-    design : StrategiesDesign
-        The grid (default ``QUICK``; ``FULL`` for the stated one).
-    seed : int
-        Root seed (every point draws the same streams).
-    workers : int, optional
-        Local worker processes (default: every core).
-    parameters : dict, optional
-        Model parameters over the defaults (units of ``softcell params``); ``radius`` and
-        ``duration`` are the study's.
-    overwrite : bool
-        Recompute what ``out`` holds from another seed, version or request.
-    progress : bool
-        Show a progress bar per point, in simulated seconds.
-    log : callable, optional
-        Receives a line per point and what ``softcell simulate`` reports.
-
-    Returns
-    -------
-    Path
-        ``out / "strategies.md"``.
-
-    Raises
-    ------
-    SoftcellError
-        For a grid that cannot run (:meth:`StrategiesDesign.check`), an unknown strategy or
-        a bad parameter (checked for every point before anything runs), or a directory
-        another study or seed made.
-    """
-    return STUDY.run(
-        out,
-        design=design,
-        seed=seed,
-        workers=workers,
-        parameters=parameters,
-        overwrite=overwrite,
-        progress=progress,
-        log=log,
-    )
 
 
 # -- what the runs measured ---------------------------------------------------------------------
@@ -271,8 +210,14 @@ def _markdown(result: dict[str, Any]) -> str:
 
 
 class Strategies(GridStudy):
-    """The strategies study in the study protocol
-    (:class:`~softcell.studies.protocol.GridStudy`)."""
+    """The strategies study (``softcell study strategies``) in the study protocol.
+
+    Its folder: ``<strategy>_R<R>/`` holds each point's realizations; ``strategies.json``,
+    ``strategies.md`` and ``strategies.png`` the result. The default design is ``QUICK``
+    (``FULL`` for the stated one); ``radius`` and ``duration`` are the study's own
+    parameters. A grid that cannot run is refused by :meth:`StrategiesDesign.check`, an
+    unknown strategy when planned.
+    """
 
     name = "strategies"
     designs = {"quick": QUICK, "full": FULL}
@@ -315,3 +260,6 @@ class Strategies(GridStudy):
 STUDY = Strategies()
 #: The summary of a strategies study's folder (see :meth:`GridStudy.summarize`).
 summarize = STUDY.summarize
+#: Run the strategies study into a folder and write its summary (:meth:`GridStudy.run
+#: <softcell.studies.protocol.GridStudy.run>`).
+strategies = STUDY.run

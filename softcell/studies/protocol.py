@@ -21,8 +21,8 @@ from typing import Any, ClassVar
 class GridStudy:
     """The protocol of a grid study (``softcell study NAME``).
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     name : str
         The study's name: its command (``softcell study NAME``) and its files.
     designs : dict of str to design
@@ -94,10 +94,41 @@ class GridStudy:
         progress: bool = True,
         log: Callable[[str], None] | None = print,
     ) -> Path:
-        """Run the study into ``out`` (every point planned first, resumable as ``softcell
-        simulate`` is) and write its summary; returns the page's path. The parameters are
-        those of the study's public function (for example
-        :func:`softcell.studies.crowding.crowding`)."""
+        """Run the study into ``out`` and write its summary.
+
+        Parameters
+        ----------
+        out : path-like
+            Results directory: one folder per point (resumable as ``softcell simulate``'s
+            are), and ``<name>.json``, ``<name>.md`` and ``<name>.png``.
+        design : design, optional
+            The grid (default: the study's :attr:`default` design).
+        seed : int
+            Root seed (every point draws the same streams).
+        workers : int, optional
+            Local worker processes (default: every core).
+        parameters : dict, optional
+            Model parameters over the defaults (units of ``softcell params``); those of
+            :attr:`own` are the study's.
+        overwrite : bool
+            Recompute what ``out`` holds from another seed, version or request, and write
+            into a non-empty folder the study did not make.
+        progress : bool
+            Show a progress bar per point, in simulated seconds.
+        log : callable, optional
+            Receives a line per point and what ``softcell simulate`` reports.
+
+        Returns
+        -------
+        Path
+            ``out / "<name>.md"``.
+
+        Raises
+        ------
+        SoftcellError
+            For a grid that cannot run (the design's ``check``), a bad parameter (every
+            point is planned before anything runs), or a folder another study or seed made.
+        """
         from softcell.io.files import check_output
         from softcell.studies.variants import own_parameters, run_points
 
