@@ -13,18 +13,14 @@ import re
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from softcell.errors import ContractError
-from softcell.model.parameters import ParameterSpec, unit_problem
-
-if TYPE_CHECKING:
-    from softcell.engine.model import Model
-    from softcell.model.parameters import Parameters
+from softcell.model.parameters import Parameters, ParameterSpec, unit_problem
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 #: numba's type of the arrays the engine hands a kernel: C-contiguous float64 vectors.
@@ -658,3 +654,117 @@ def _reason(exc: Exception) -> str:
     ]
     text = " ".join(lines[:2]) or type(exc).__name__
     return text if len(text) <= 300 else text[:297] + "..."
+
+
+@dataclass
+class Model:
+    """The compiled model of one parameter point: what an integrator composes into a stepper.
+
+    Attributes
+    ----------
+    params : Parameters
+    terms : list of EnergyTerm
+        For a free bot (``membrane`` False), only the terms that act on the bot alone
+        (:meth:`EnergyTerm.bot_kernel`; the arena's walls).
+    protocol : DrivingProtocol
+    partials : compiled function
+        Sum of the terms' partials kernels (see ``compose_partials``).
+    coefficients : tuple of float64 arrays
+        One per term.
+    drive : compiled function
+        The protocol's drive kernel.
+    drive_coefficients : ndarray
+        float64: the protocol's coefficients, each in its declared unit.
+    context : float64[3]
+        l0 (cm), bot semi-major and semi-minor axes (cm).
+    membrane_mobility : float
+        2 pi / (gamma_mem l0) (cm^2 N^-1 s^-1 per unit xi): dg_k/dt = membrane_mobility f_hat_k.
+    bot_mobility : float64[3]
+        1/gamma_T, 1/gamma_T (cm N^-1 s^-1) and 1/gamma_R (N^-1 cm^-1 s^-1).
+    nodes : int
+        Collocation points N of the membrane.
+    cutoff : int
+        Fourier cutoff Lc: modes k = -Lc..Lc.
+    membrane : bool
+        False for a free bot (no membrane; see ``has_membrane``).
+    friction : FrictionLaw
+        The membrane's friction law. When it is
+        not ``linear``, an integrator evaluates the force density
+        f = (2 pi / l0) sum_k f_hat_k e^{i k xi} (N cm^-1) at M points (the smallest power of
+        two >= 8 Lc, at most N: 128), applies the law's kernel there and moves the modes by the
+        velocity's modes ``|k| <= Lc``.
+    friction_coefficients : ndarray
+        float64: the friction law's coefficients, each in its declared unit.
+    force_scale : float
+        2 pi / l0 (cm^-1), the factor above.
+    names : dict
+        The component names by kind, as files store them.
+    origins : dict
+        Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
+    pair_terms : list of PairTerm
+        The pair terms between the membranes of an assembly's cells (none for one cell).
+    event : callable or None
+        The protocol's compiled event kernel (:meth:`DrivingProtocol.event_kernel`; its value
+        in the unit the protocol chooses, >= 0 ends the phase), or None.
+    """
+
+    params: Parameters
+    terms: list[EnergyTerm]
+    protocol: DrivingProtocol
+    partials: Callable[..., None]
+    coefficients: tuple[np.ndarray, ...]
+    drive: Callable[..., None]
+    drive_coefficients: np.ndarray
+    context: np.ndarray
+    membrane_mobility: float
+    bot_mobility: np.ndarray
+    nodes: int
+    cutoff: int
+    membrane: bool = True
+    friction: FrictionLaw | None = None
+    friction_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    force_scale: float = 1.0
+    names: dict[str, object] = field(default_factory=dict)
+    #: Where each component came from, by ``"<kind> <name>"`` (for errors that name it).
+    origins: dict[str, str] = field(default_factory=dict)
+    #: The pair terms between the membranes of an assembly's cells (none for one cell).
+    pair_terms: list[PairTerm] = field(default_factory=list)
+    #: The protocol's compiled event kernel, or None (:meth:`DrivingProtocol.event_kernel`).
+    event: Callable[..., float] | None = None
+
+    @property
+    def pair_reach(self) -> float:
+        """The distance (cm) within which the pair terms act: the largest reach."""
+        return max((t.reach() for t in self.pair_terms), default=0.0)
+
+    @property
+    def has_membrane(self) -> bool:
+        return self.membrane and bool(self.terms)
+
+    @property
+    def bot_terms(self) -> list[EnergyTerm]:
+        """The terms with an energy of the bot alone (:meth:`EnergyTerm.bot_kernel`)."""
+        return [t for t in self.terms if t.has_bot_energy]
+
+    @property
+    def reads_pose(self) -> bool:
+        """True if any term's density depends on the bot's pose."""
+        return any(t.reads_pose for t in self.terms)
+
+    @property
+    def couples_bot(self) -> bool:
+        """Deprecated name of :attr:`reads_pose` (until softcell 0.4)."""
+        import warnings
+
+        warnings.warn(
+            "Model.couples_bot was renamed Model.reads_pose in softcell 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.reads_pose
+
+    @property
+    def nonlinear_friction(self) -> bool:
+        """True when the friction law is not the linear v = f / gamma_mem (integrators then
+        apply the law's kernel)."""
+        return self.has_membrane and self.friction is not None and not self.friction.linear

@@ -20,7 +20,7 @@ from softcell.components.contracts import Component, Schedule, kind_name
 from softcell.errors import ContractError
 
 if TYPE_CHECKING:
-    from softcell.engine.model import Model
+    from softcell.components.contracts import Model
 
 #: What each kernel writes, in the order of its output arguments.
 PARTIALS_OUT = ("p0x", "p0y", "p1x", "p1y", "p2x", "p2y", "dpose")

@@ -13,7 +13,7 @@ import numpy as np
 from softcell.engine.state import circle_modes, equilibrium_radius
 
 if TYPE_CHECKING:
-    from softcell.engine.model import Model
+    from softcell.components.contracts import Model
 
 
 def _curve(modes: np.ndarray, n: int) -> np.ndarray:

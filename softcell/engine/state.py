@@ -19,7 +19,7 @@ from softcell.model.parameters import Parameters
 from softcell.settings import BLOWUP_CHECK_POINTS, BLOWUP_LENGTH_FRACTION
 
 if TYPE_CHECKING:
-    from softcell.engine.model import Model
+    from softcell.components.contracts import Model
 
 
 def equilibrium_radius(params: Parameters) -> float:

@@ -1,2 +1,3 @@
-"""Layer 3, beside the plugins: everything that touches a file or a screen (TOML, NetCDF,
-atomic writes, video capture and rendering, figures)."""
+"""Files: NetCDF with checksums, atomic writes and the rules every output follows, the
+compiled-model cache on disk, configuration files, exports (GSD, movement) and the pages
+softcell writes for people."""

@@ -46,14 +46,20 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from softcell.errors import ConfigError, ParameterError
 from softcell.model.obstacle_layout import obstacle_text
 from softcell.model.parameters import suggest
 
-if TYPE_CHECKING:
-    from softcell.components.registry import Registry
+
+class Lookup(Protocol):
+    """What :meth:`RunConfig.check_components` asks of a registry
+    (:class:`softcell.components.registry.Registry` is one): the component of a kind and a
+    name, or a :class:`ConfigError` naming what is available."""
+
+    def get(self, kind: str, name: str) -> object: ...
+
 
 DEFAULT_COMPONENTS: dict[str, Any] = {
     "energy_terms": ["bending", "tension", "contact"],
@@ -129,13 +135,13 @@ class RunConfig:
             assembly={**self.assembly, **dict(assembly)},
         )
 
-    def check_components(self, registry: Registry) -> None:
+    def check_components(self, registry: Lookup) -> None:
         """Raise :class:`ConfigError` unless every component named exists in ``registry``
         (with a suggestion for a misspelt one) and no energy term is named twice.
 
         Parameters
         ----------
-        registry : Registry
+        registry : Lookup
             Where the components are looked up.
         """
         terms = self.components.get("energy_terms", [])
