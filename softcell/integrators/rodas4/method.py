@@ -165,6 +165,46 @@ def step_factor(err, h, clock, h_rejected, err_rejected):
 
 
 @njit(**LEAN_JIT)
+def trial_step(clock, max_step, t, t_switch):
+    """The size (s) of the next attempt from ``t`` (s): the step control's ``clock[H_NEXT]``
+    within ``max_step``, stretched or cut to land on the next switch ``t_switch`` (s) when
+    that is within 5 % more; and whether it lands there. Both loops use it."""
+    h = min(clock[H_NEXT], max_step)
+    land = False
+    if t_switch - t <= 1.05 * h:
+        h = t_switch - t
+        land = True
+    return h, land
+
+
+@njit(**LEAN_JIT)
+def judge(err, h, clock, h_rejected, err_rejected, counters):
+    """Accept or reject an attempt of size ``h`` (s) whose scaled error is ``err`` (a
+    non-finite error counts as 1e10), after :func:`step_factor`; both loops use it.
+
+    Returns (accepted, h_next, err): accepted, the next step's size (no larger than this one
+    just after a rejection) with the step control's record of this one in ``clock``;
+    rejected, ``clock[H_NEXT]`` set for the next attempt and the rejection counted. ``err``
+    is the error as judged, for the next call's ``err_rejected``.
+    """
+    if not math.isfinite(err):
+        err = 1e10
+    fac = step_factor(err, h, clock, h_rejected, err_rejected)
+    if err <= 1.0:
+        h_new = h / fac
+        if clock[REJECTED_LAST] > 0.0:
+            h_new = min(h_new, h)
+        clock[H_ACCEPTED] = h
+        clock[ERR_ACCEPTED] = max(1e-2, err)
+        clock[REJECTED_LAST] = 0.0
+        return True, h_new, err
+    clock[H_NEXT] = h / fac
+    clock[REJECTED_LAST] = 1.0
+    counters[REJECTED] += 1
+    return False, 0.0, err
+
+
+@njit(**LEAN_JIT)
 def accumulate(g, mobility, out, drag):
     """Add one grid's force modes to the modes' rates in ``out`` and its (2 pi / N)-weighted
     pose derivatives to ``drag``."""

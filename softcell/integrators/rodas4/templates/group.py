@@ -11,7 +11,6 @@ counts references). Only the viscous friction law: the pair forces move the mode
 membrane's mobility.
 """
 
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,22 +25,20 @@ from softcell.engine.kernels.rosenbrock import (
     stages,
 )
 from softcell.integrators.rodas4.method import (
-    ERR_ACCEPTED,
     GAMMA,
     H_ACCEPTED,
     H_LAST,
     H_NEXT,
     JACOBIANS,
     OK,
-    REJECTED,
-    REJECTED_LAST,
     RHS_CALLS,
     SINGULAR,
     STEP_UNDERFLOW,
     STEPS,
     T_LAST,
     T,
-    step_factor,
+    judge,
+    trial_step,
 )
 
 if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
@@ -167,11 +164,7 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
         counters[JACOBIANS] += 1
         h_rejected = err_rejected = 0.0
         while True:
-            h = min(clock[H_NEXT], max_step)
-            land = False
-            if t_switch - t <= 1.05 * h:
-                h = t_switch - t
-                land = True
+            h, land = trial_step(clock, max_step, t, t_switch)
             if h <= 1e-14 * (1.0 + abs(t)):
                 return STEP_UNDERFLOW
             if not factor_iteration_matrix(gw.jac, h, GAMMA, gw.mat, gw.pivots):
@@ -192,16 +185,8 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
             )
             counters[RHS_CALLS] += cc.shape[0] - 1
             err = error_norm(u, gw.y, gw.k, atol, rtol, gw.ynew)
-            if not math.isfinite(err):
-                err = 1e10
-            fac = step_factor(err, h, clock, h_rejected, err_rejected)
-            if err <= 1.0:
-                h_new = h / fac
-                if clock[REJECTED_LAST] > 0.0:
-                    h_new = min(h_new, h)
-                clock[H_ACCEPTED] = h
-                clock[ERR_ACCEPTED] = max(1e-2, err)
-                clock[REJECTED_LAST] = 0.0
+            accepted, h_new, err = judge(err, h, clock, h_rejected, err_rejected, counters)
+            if accepted:
                 dense_output(u, gw.ynew, gw.k, hd, dense)
                 for i in range(u.size):
                     u[i] = gw.ynew[i]
@@ -221,9 +206,6 @@ def advance_group(state, t_end, sample, schedule, problem, control, tableau, ws,
                 counters[STEPS] += 1
                 break
             h_rejected, err_rejected = h, err
-            clock[H_NEXT] = h / fac
-            clock[REJECTED_LAST] = 1.0
-            counters[REJECTED] += 1
     if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
         for i in range(u.size):
             sample[i] = u[i]

@@ -28,15 +28,12 @@ from softcell.engine.kernels.rosenbrock import (
     stages,
 )
 from softcell.integrators.rodas4.method import (
-    ERR_ACCEPTED,
     GAMMA,
     H_ACCEPTED,
     H_LAST,
     H_NEXT,
     JACOBIANS,
     OK,
-    REJECTED,
-    REJECTED_LAST,
     RHS_CALLS,
     SINGULAR,
     STEP_UNDERFLOW,
@@ -44,7 +41,8 @@ from softcell.integrators.rodas4.method import (
     T_LAST,
     T,
     accumulate,
-    step_factor,
+    judge,
+    trial_step,
 )
 
 if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the numba flags
@@ -315,11 +313,7 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
         counters[JACOBIANS] += 1
         h_rejected = err_rejected = 0.0
         while True:
-            h = min(clock[H_NEXT], max_step)
-            land = False
-            if t_switch - t <= 1.05 * h:
-                h = t_switch - t
-                land = True
+            h, land = trial_step(clock, max_step, t, t_switch)
             if h <= 1e-14 * (1.0 + abs(t)):
                 return STEP_UNDERFLOW
             if not factor_iteration_matrix(ws.jac, h, GAMMA, mat, ws.pivots):
@@ -340,16 +334,8 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
             )
             counters[RHS_CALLS] += cc.shape[0] - 1
             err = error_norm(u, y, k, atol, rtol, ynew)
-            if not math.isfinite(err):
-                err = 1e10
-            fac = step_factor(err, h, clock, h_rejected, err_rejected)
-            if err <= 1.0:
-                h_new = h / fac
-                if clock[REJECTED_LAST] > 0.0:
-                    h_new = min(h_new, h)
-                clock[H_ACCEPTED] = h
-                clock[ERR_ACCEPTED] = max(1e-2, err)
-                clock[REJECTED_LAST] = 0.0
+            accepted, h_new, err = judge(err, h, clock, h_rejected, err_rejected, counters)
+            if accepted:
                 dense_output(u, ynew, k, hd, dense)
                 for i in range(u.size):
                     u[i] = ynew[i]
@@ -378,9 +364,6 @@ def advance_to(state, t_end, sample, schedule, problem, control, tableau, ws, lo
                 counters[STEPS] += 1
                 break
             h_rejected, err_rejected = h, err
-            clock[H_NEXT] = h / fac
-            clock[REJECTED_LAST] = 1.0
-            counters[REJECTED] += 1
     phase_index[0] = p
     if abs(t - t_end) <= eps or clock[H_LAST] == 0.0:
         for i in range(u.size):
