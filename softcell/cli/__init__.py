@@ -1,6 +1,6 @@
 """The ``softcell`` command: one parse, then one call of the public API per verb.
 
-The verbs live by family in this package (:mod:`~softcell.cli.run`, :mod:`~softcell.cli.analysis`,
+The verbs live by family in this package (:mod:`~softcell.cli.run`, :mod:`~softcell.cli.analyze`,
 :mod:`~softcell.cli.video`, :mod:`~softcell.cli.paper`, :mod:`~softcell.cli.studies`), the flags
 they share in :mod:`~softcell.cli.flags`. Every parameter of the model is a flag (``--radius
 4,8,12`` sweeps it); a TOML file may set them too (flags win). Bad input is reported as one
@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Callable, Sequence
 
 from softcell._version import __version__
-from softcell.cli import analysis, paper, run, studies, video
+from softcell.cli import analyze, paper, run, studies, video
 from softcell.cli.flags import Help, Parser
 from softcell.engine.interrupt import exit_status, received, stop_signals
 from softcell.errors import CacheWarning, PluginWarning, SoftcellError
@@ -27,7 +27,7 @@ from softcell.errors import CacheWarning, PluginWarning, SoftcellError
 #: A verb's flags are built only when it runs, so ``softcell --version`` and ``--help`` import
 #: nothing heavy.
 COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None]]] = {
-    name: {**run.VERBS, **analysis.VERBS, **video.VERBS, **paper.VERBS, **studies.VERBS}[name]
+    name: {**run.VERBS, **analyze.VERBS, **video.VERBS, **paper.VERBS, **studies.VERBS}[name]
     for name in (
         "plugins",
         "params",
