@@ -21,21 +21,14 @@ from typing import Any, ClassVar
 class GridStudy:
     """The protocol of a grid study (``softcell study NAME``).
 
-    Attributes
-    ----------
-    name : str
-        The study's name: its command (``softcell study NAME``) and its files.
-    designs : dict of str to design
-        The study's designs by name: ``"quick"`` (a look) and ``"full"``; a design is a
-        frozen dataclass with ``name``, ``radii``, ``realizations``, ``duration`` and a
-        ``check()`` that refuses a grid that cannot run.
-    default : str
-        The design :meth:`run` runs when given none.
-    own : tuple of str
-        The model parameters the study sets itself (refused among the caller's).
-    flags : tuple of str
-        The design's fields that only this study has (``gaps``, ``fractions``, ...), which
-        the command line offers as flags beside ``radii``, ``realizations`` and ``duration``.
+    A study class sets ``name`` (its command, ``softcell study NAME``, and the name of its
+    files), ``designs`` (its designs by name: ``"quick"``, a look, and ``"full"``; a design is
+    a frozen dataclass with ``name``, ``radii``, ``realizations``, ``duration`` and a
+    ``check()`` that refuses a grid that cannot run), ``default`` (the design :meth:`run`
+    runs when given none), ``own`` (the model parameters the study sets itself, refused
+    among the caller's) and ``flags`` (the design's fields that only this study has, such as
+    ``gaps`` or ``fractions``, which the command line offers beside ``radii``,
+    ``realizations`` and ``duration``).
     """
 
     name: ClassVar[str]
@@ -78,7 +71,20 @@ class GridStudy:
     # -- what every study does ----------------------------------------------------------------
 
     def design(self, quick: bool, **changes: Any) -> Any:
-        """The quick or the full design, with ``changes`` to its fields (named as changed)."""
+        """The quick or the full design, with some of its fields changed.
+
+        Parameters
+        ----------
+        quick : bool
+            The quick design (a look) rather than the full one.
+        **changes
+            Fields of the design and their new values (named ``"<name>, changed"``).
+
+        Returns
+        -------
+        design
+            The study's design, changed.
+        """
         design = self.designs["quick" if quick else "full"]
         return replace(design, name=f"{design.name}, changed", **changes) if changes else design
 
@@ -102,14 +108,14 @@ class GridStudy:
             Results directory: one folder per point (resumable as ``softcell simulate``'s
             are), and ``<name>.json``, ``<name>.md`` and ``<name>.png``.
         design : design, optional
-            The grid (default: the study's :attr:`default` design).
+            The grid (default: the design the study names in ``default``).
         seed : int
             Root seed (every point draws the same streams).
         workers : int, optional
             Local worker processes (default: every core).
         parameters : dict, optional
-            Model parameters over the defaults (units of ``softcell params``); those of
-            :attr:`own` are the study's.
+            Model parameters over the defaults (units of ``softcell params``); those named in
+            ``own`` are the study's.
         overwrite : bool
             Recompute what ``out`` holds from another seed, version or request, and write
             into a non-empty folder the study did not make.
@@ -152,8 +158,24 @@ class GridStudy:
     def summarize(
         self, out: Path, design: Any, seed: int, parameters: dict[str, Any] | None = None
     ) -> Path:
-        """``<name>.json``, ``<name>.png`` and ``<name>.md`` in ``out`` from its runs (made
-        with the model ``parameters`` over the defaults); returns the page's path."""
+        """Write the study's record, figure and page from the runs in ``out``.
+
+        Parameters
+        ----------
+        out : Path
+            The study's folder, holding its points' runs.
+        design : design
+            The design that was run.
+        seed : int
+            The root seed it was run from.
+        parameters : dict, optional
+            The model parameters over the defaults it was run with.
+
+        Returns
+        -------
+        Path
+            ``out / "<name>.md"``, beside ``<name>.json`` and ``<name>.png``.
+        """
         from softcell._version import __version__
         from softcell.io.files import atomic_write
 
