@@ -25,6 +25,14 @@ def first_sentence(path: Path) -> str:
     return (match.group(1) if match else text) or "(no docstring)"
 
 
+def markdown(text: str) -> str:
+    """A docstring's reStructuredText as Markdown for a table cell: roles and double
+    backquotes as code, and the cell's separator escaped."""
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"`\1`", text)
+    text = re.sub(r"``([^`]+)``", r"`\1`", text)
+    return text.replace("|", "\\|")
+
+
 def module_map() -> str:
     """A Markdown table: every module of softcell (templates included) and what it holds."""
     rows = ["| module | what it holds |", "| --- | --- |"]
@@ -32,7 +40,7 @@ def module_map() -> str:
         relative = path.relative_to(ROOT).as_posix()
         if path.name == "__main__.py" or path.name == "_version.py":
             continue
-        rows.append(f"| `{relative}` | {first_sentence(path).replace('|', '/')} |")
+        rows.append(f"| `{relative}` | {markdown(first_sentence(path))} |")
     return "\n".join(rows)
 
 
