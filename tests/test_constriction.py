@@ -32,7 +32,7 @@ from softcell.studies.constriction import (
 def test_the_gap_is_w_wide_surface_to_surface_and_the_chambers_are_squares(radius, gap):
     text, gate = channel(radius, gap)
     walls = parse_obstacles(text)
-    assert len(walls) == 6 and {k for k, _ in walls} == {"wall"}
+    assert len(walls) == 6 and {o.kind for o in walls} == {"wall"}
     w = 2 * gap * radius
     # The middle of the gap is w / 2 from both partition walls, and nearer to nothing else.
     d = surface_distances(np.array([gate.x]), np.array([0.0]), text)[:, 0]

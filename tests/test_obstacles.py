@@ -14,7 +14,12 @@ from softcell.errors import ConfigError, ParameterError
 from softcell.integrators.rodas4 import pack
 from softcell.io.netcdf import read_dataset
 from softcell.model.configuration import config_from_mapping
-from softcell.model.obstacle_layout import check_clear_of_start, obstacle_text, surface_distances
+from softcell.model.obstacle_layout import (
+    check_clear_of_start,
+    from_table,
+    obstacle_text,
+    surface_distances,
+)
 from softcell.model.parameters import Parameters
 from softcell.settings import CONTACT_CUTOFF_LENGTHS
 from softcell.testing.compare import rodas4_jacobians, term_hessians
@@ -133,7 +138,7 @@ def test_a_pushed_membrane_never_enters_an_obstacle(gap, shift, post, angle, see
     mid = (0.5 * (turned[3][0] + turned[0][0]), 0.5 * (turned[3][1] + turned[0][1]))
     out = np.hypot(*mid)
     tables.append({"x": mid[0] * (1 + post / out), "y": mid[1] * (1 + post / out), "radius": post})
-    text = obstacle_text(tables)
+    text = obstacle_text(from_table(t) for t in tables)
     curves, poses = _pushed(text, seed, 3.0)
     deepest = _distances(curves[:, 0], curves[:, 1], text).min()
     assert deepest >= -3 * 0.01, f"the membrane entered an obstacle by {-deepest:.3g} cm"

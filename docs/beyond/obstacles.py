@@ -83,13 +83,13 @@ def figure(data: dict, out: Path) -> None:
         len(data), 1, figsize=(7.2, 1.75 * len(data)), sharex=True, layout="constrained"
     )
     for ax, (name, (ds, obstacles)) in zip(axes, data.items(), strict=True):
-        for kind, v in parse_obstacles(obstacles):
-            if kind == "post":
-                ax.add_patch(Circle(v[:2], v[2], color="0.45"))
+        for o in parse_obstacles(obstacles):
+            if o.kind == "post":
+                ax.add_patch(Circle((o.x, o.y), o.radius, color="0.45"))
             else:
-                half = v[4] / 2  # an axis-aligned wall, drawn with its round ends squared
-                x0, x1 = sorted((v[0], v[2]))
-                y0, y1 = sorted((v[1], v[3]))
+                half = o.half_thickness  # an axis-aligned wall, its round ends squared
+                x0, x1 = sorted((o.x0, o.x1))
+                y0, y1 = sorted((o.y0, o.y1))
                 ax.add_patch(
                     Rectangle(
                         (x0 - half, y0 - half),

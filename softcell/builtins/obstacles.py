@@ -11,11 +11,11 @@ presses on them (a wall without thickness would stop a point with at most A / la
 unit length, which the bot overcomes). Beyond CONTACT_CUTOFF_LENGTHS lambda nothing is felt.
 Obstacles act on the membrane only: the bot, inside its ring, meets them through it.
 
-The obstacles are one parameter, ``obstacles`` (cm), a list separated by ``;`` of
-``post X Y RADIUS`` and ``wall X0 Y0 X1 Y1 WIDTH``; a configuration file writes them as
-``[[obstacles]]`` tables and the command line as ``--obstacle X,Y,RADIUS`` and
-``--wall X0,Y0,X1,Y1,WIDTH`` (:func:`softcell.model.obstacle_layout.obstacle_text` builds
-the parameter).
+The obstacles are :class:`~softcell.model.obstacle_layout.Post` and
+:class:`~softcell.model.obstacle_layout.Wall` objects, stored as one parameter,
+``obstacles`` (cm), a list separated by ``;`` of ``post X Y RADIUS`` and
+``wall X0 Y0 X1 Y1 WIDTH``; a configuration file writes them as ``[[obstacles]]`` tables and
+the command line as ``--obstacle X,Y,RADIUS`` and ``--wall X0,Y0,X1,Y1,WIDTH``.
 """
 
 from __future__ import annotations
@@ -28,7 +28,13 @@ from numba import njit
 from softcell.components.contracts import EnergyTerm
 from softcell.components.hookspecs import hookimpl
 from softcell.errors import ParameterError
-from softcell.model.obstacle_layout import MEANING, parse_obstacles, surface_distances
+from softcell.model.obstacle_layout import (
+    MEANING,
+    Post,
+    Wall,
+    parse_obstacles,
+    surface_distances,
+)
 from softcell.model.parameters import MODEL_PARAMETERS, ParameterSpec
 from softcell.settings import CONTACT_CUTOFF_LENGTHS, JIT
 
@@ -40,13 +46,13 @@ MIN_THICKNESS_LENGTHS = 10.0
 def _coefficients(text: str, amplitude: float, length: float) -> np.ndarray:
     """[A, lambda, posts, walls, (x, y, r) per post, (x0, y0, x1, y1, w / 2) per wall]."""
     items = parse_obstacles(text)
-    posts = [v for k, v in items if k == "post"]
-    walls = [v for k, v in items if k == "wall"]
+    posts = [o for o in items if isinstance(o, Post)]
+    walls = [o for o in items if isinstance(o, Wall)]
     flat = [amplitude, length, len(posts), len(walls)]
-    for v in posts:
-        flat.extend(v)
-    for v in walls:
-        flat.extend((*v[:4], 0.5 * v[4]))
+    for post in posts:
+        flat.extend((post.x, post.y, post.radius))
+    for wall in walls:
+        flat.extend((wall.x0, wall.y0, wall.x1, wall.y1, wall.half_thickness))
     return np.array(flat, dtype=np.float64)
 
 
@@ -170,15 +176,13 @@ class Obstacles(EnergyTerm):
         (where the cells start is checked by the run that places them:
         :func:`softcell.model.obstacle_layout.check_clear_of_start` for one cell, the placement
         for an assembly)."""
-        items = parse_obstacles(str(params.obstacles))
         thinnest = MIN_THICKNESS_LENGTHS * float(params.contact_length)
-        for kind, numbers in items:
-            half = numbers[2] if kind == "post" else 0.5 * numbers[4]
-            if half < thinnest:
-                what = "post radius" if kind == "post" else "wall half-width"
+        for obstacle in parse_obstacles(str(params.obstacles)):
+            if obstacle.half_thickness < thinnest:
+                what = "post radius" if isinstance(obstacle, Post) else "wall half-width"
                 raise ParameterError(
                     "obstacles",
-                    f"'{kind} {' '.join(f'{v:g}' for v in numbers)}'",
+                    repr(obstacle.text),
                     f"must have a {what} >= {thinnest:g} cm ({MIN_THICKNESS_LENGTHS:g} "
                     "contact lengths): a thinner obstacle lets a pushed membrane through",
                     "cm",

@@ -8,6 +8,7 @@ parsed values with :func:`run_config`, :func:`numbers` and :func:`given`. Bad in
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -260,23 +261,23 @@ def _assembly(args: argparse.Namespace) -> dict[str, Any]:
 def _obstacles(args: argparse.Namespace) -> str:
     """The parameter ``obstacles`` from ``--obstacle X,Y,RADIUS`` and
     ``--wall X0,Y0,X1,Y1,WIDTH`` (cm), or "" when neither is given."""
-    from softcell.model.obstacle_layout import FIELDS, obstacle_text
+    from softcell.model.obstacle_layout import Post, Wall, obstacle_text
 
-    tables = []
-    for name, kind in (("obstacle", "post"), ("wall", "wall")):
+    placed = []
+    for name, cls in (("obstacle", Post), ("wall", Wall)):
         for raw in getattr(args, name, None) or ():
-            words = [w.strip() for w in raw.split(",")]
-            fields = FIELDS[kind]
+            fields = [f.name for f in dataclasses.fields(cls)]
             try:
+                words = [float(w) for w in raw.split(",")]
                 if len(words) != len(fields):
                     raise ValueError
-                tables.append(dict(zip(fields, (float(w) for w in words), strict=True)))
             except ValueError:
                 raise SoftcellError(
                     f"--{name} {raw} is not allowed: must be "
                     f"{','.join(f.upper() for f in fields)} (numbers in cm)"
                 ) from None
-    return obstacle_text(tables) if tables else ""
+            placed.append(cls(*words))
+    return obstacle_text(placed)
 
 
 def _component_choice(args: argparse.Namespace) -> dict[str, Any]:

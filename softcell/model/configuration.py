@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from softcell.errors import ConfigError, ParameterError
-from softcell.model.obstacle_layout import obstacle_text
+from softcell.model.obstacle_layout import from_table, obstacle_text
 from softcell.model.parameters import suggest
 
 
@@ -218,7 +218,7 @@ def _obstacle_tables(data: dict[str, Any], source: object) -> str:
             "parameter obstacles: keep one"
         )
     try:
-        return obstacle_text(tables)
+        return obstacle_text(from_table(t) for t in tables)
     except ParameterError as exc:
         raise ConfigError(f"{source}: {exc}") from None
 

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from softcell.errors import SoftcellError
+from softcell.model.obstacle_layout import Wall, obstacle_text
 from softcell.studies.protocol import GridStudy
 
 #: Side of each square chamber, in cell radii R.
@@ -135,8 +136,9 @@ def channel(radius: float, gap: float) -> tuple[str, Gate]:
     if gap < OPEN:
         tip = gap * radius + t / 2
         walls += [(x_gate, -y, x_gate, -tip), (x_gate, y, x_gate, tip)]
-    text = "; ".join("wall " + " ".join(f"{v:.6g}" for v in (*w, t)) for w in walls)
-    return text, Gate(x=x_gate, band=BAND * radius)
+    # Six significant digits: the walls' entries read as they always have.
+    placed = [Wall(*(float(f"{v:.6g}") for v in (*w, t))) for w in walls]
+    return obstacle_text(placed), Gate(x=x_gate, band=BAND * radius)
 
 
 def passages(x: np.ndarray, gate: Gate) -> int:

@@ -21,7 +21,7 @@ import xarray as xr
 
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
-from softcell.model.obstacle_layout import parse_obstacles
+from softcell.model.obstacle_layout import Post, parse_obstacles
 from softcell.schema import validate
 
 #: What each suffix is written as: (codec, pixel format).
@@ -329,14 +329,14 @@ class _Scene:
             ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
                     color="k", lw=2.5 if walls else 0.8, ls="-" if walls else "--")  # fmt: skip
         text = str(self.ds.attrs.get("parameter_obstacles", "") or "")
-        for kind, v in parse_obstacles(text) if text else []:
-            if kind == "post":
-                ax.add_patch(Circle((v[0], v[1]), v[2], color="0.35"))
+        for o in parse_obstacles(text) if text else ():
+            if isinstance(o, Post):
+                ax.add_patch(Circle((o.x, o.y), o.radius, color="0.35"))
             else:
-                dx, dy = v[2] - v[0], v[3] - v[1]
-                n = np.array([-dy, dx]) / math.hypot(dx, dy) * v[4] / 2
-                corners = [(v[0] + n[0], v[1] + n[1]), (v[2] + n[0], v[3] + n[1]),
-                           (v[2] - n[0], v[3] - n[1]), (v[0] - n[0], v[1] - n[1])]  # fmt: skip
+                dx, dy = o.x1 - o.x0, o.y1 - o.y0
+                n = np.array([-dy, dx]) / math.hypot(dx, dy) * o.half_thickness
+                corners = [(o.x0 + n[0], o.y0 + n[1]), (o.x1 + n[0], o.y1 + n[1]),
+                           (o.x1 - n[0], o.y1 - n[1]), (o.x0 - n[0], o.y0 - n[1])]  # fmt: skip
                 ax.add_patch(Polygon(corners, color="0.35"))
 
     def draw(self, t: float) -> np.ndarray:
