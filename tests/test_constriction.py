@@ -112,7 +112,7 @@ def test_a_bad_model_parameter_is_refused_for_every_radius_before_any_run(tmp_pa
     [
         (["--gaps", "0.8,2"], "gap w / 2R = 2.0"),
         (["--radii", "5,x"], "--radii '5,x' is not a comma-separated list"),
-        (["--only", "pivot"], "--only names sensitivity variants"),
+        (["--only", "pivot"], "it belongs to 'study sensitivity' or 'study beyond'"),
     ],
 )
 def test_the_command_refuses_a_bad_grid_in_one_line(tmp_path, capsys, argv, words):
@@ -123,7 +123,11 @@ def test_the_command_refuses_a_bad_grid_in_one_line(tmp_path, capsys, argv, word
 
 def test_grid_flags_belong_to_the_constriction_study(tmp_path, capsys):
     code = main(["study", "sensitivity", "-o", str(tmp_path / "o"), "--gaps", "0.8"])
-    assert code == 2 and "--gaps belongs to 'study constriction'" in capsys.readouterr().err
+    assert (
+        code == 2
+        and "--gaps does not belong to 'study sensitivity'; it belongs to 'study constriction'"
+        in capsys.readouterr().err
+    )
 
 
 def test_a_small_study_end_to_end(tmp_path, capsys):

@@ -15,12 +15,12 @@ from softcell.cli import main
 from softcell.errors import SoftcellError
 from softcell.studies.sensitivity import (
     BASE,
+    STUDY,
     VARIANTS,
     candidates,
     crossing,
     flips,
     sensitivity,
-    variants_named,
 )
 
 SMALL = replace(
@@ -47,7 +47,7 @@ def _result(verdicts, **facts):
 
 
 def test_flips_and_candidates_follow_their_rules():
-    variants = variants_named(["k_0.18", "pivot", "coulomb"])
+    variants = STUDY.named(["k_0.18", "pivot", "coulomb"])
     results = {
         "default": _result({"a": "agrees", "b": "differs", "c": "differs"}),
         "k_0.18": _result({"a": "agrees", "b": "agrees", "c": "differs"}),  # strictly more
@@ -102,13 +102,13 @@ def test_the_variants_move_one_unknown_each():
     for v in VARIANTS[1:]:  # what a variant sets belongs to its unknown alone
         assert set(v.parameters) | set(v.components) <= owns[v.unknown]
     with pytest.raises(SoftcellError, match="unknown variant"):
-        variants_named(["k_0.5"])
+        STUDY.named(["k_0.5"])
 
 
 @pytest.mark.slow
 def test_small_study_runs_resumes_and_summarizes(tmp_path):
     out = tmp_path / "study"
-    variants = variants_named(["k_0.18"])
+    variants = STUDY.named(["k_0.18"])
     lines: list[str] = []
     report = sensitivity(
         out, variants=variants, base=SMALL, workers=2, progress=False, log=lines.append

@@ -1,4 +1,5 @@
-"""The verbs of studies beyond the paper: ``study NAME`` and ``beyond``."""
+"""The verbs of studies beyond the paper: ``study NAME`` (every study, through its protocol)
+and ``beyond`` (the same as ``study beyond``)."""
 
 from __future__ import annotations
 
@@ -7,128 +8,104 @@ from typing import Any
 
 from softcell.cli import flags
 from softcell.errors import SoftcellError
+from softcell.studies import WHERE
+
+#: Each design flag: its metavar (None for a switch) and its help.
+DESIGN_FLAGS: dict[str, tuple[str | None, str]] = {
+    "quick": (
+        None,
+        "the grid studies: a look (constriction ~1 min, crowding ~1 h, strategies ~8 min on "
+        "2 cores) instead of the full grid (20 min; ~12 h; ~1.5 h)",
+    ),
+    "radii": ("R1,R2,...", "the grid studies: cell radii R (cm)"),
+    "gaps": ("G1,G2,...", "constriction: gap widths w / 2R, in (0, 1.5]; 1.5 is no partition"),
+    "fractions": ("F1,F2,...", "crowding: area fractions, in (0, 0.785)"),
+    "cells": ("N", "crowding: cells per box (a square number)"),
+    "strategies": (
+        "P1,P2,...",
+        "strategies: driving protocols (default: run_and_tumble, graspion, bump_and_turn, "
+        "active_brownian, chiral)",
+    ),
+    "realizations": ("N", "the grid studies: realizations per grid point"),
+    "duration": ("SECONDS", "the grid studies: duration of each realization (s)"),
+    "only": (
+        "NAMES",
+        "sensitivity, beyond: comma-separated variants to run beside the reference (default: "
+        "all; sensitivity: bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
+        "lambda_1e-4, pivot, coulomb, gamma_mem_4.7e-5, torque_1e-3, pivot_coulomb; beyond: "
+        "coulomb_3e-05, coulomb_0.0001, coulomb_0.0003, arena)",
+    ),
+}
+#: How the command line reads a design flag's text.
+READ = {
+    "radii": flags.numbers,
+    "gaps": flags.numbers,
+    "fractions": flags.numbers,
+    "strategies": lambda _, raw: flags.names(raw),
+    "only": lambda _, raw: flags.names(raw),
+}
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    flags.output(p, "results directory (one folder per point or variant inside)")
+    flags.overwrite(
+        p,
+        "recompute what the directory holds from another seed or version, or write "
+        "into a non-empty directory the study did not make",
+    )
+    flags.seed(p, "root seed of every point or variant")
+    flags.workers(p, "local worker processes (default: every core)")
+    flags.quiet(p)
 
 
 def _add_study(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "study",
-        choices=["sensitivity", "constriction", "crowding", "strategies"],
-        help="sensitivity: the quick design over one of the paper's unknowns at a "
-        "time (bot size, k, Lambda_c, lambda, rotation, friction); constriction: how often "
-        "one cell passes a gap in a wall, against the gap's width and R; crowding: the cells' "
-        "D hat and <tau_g> against area fraction and R; strategies: D hat, <tau_g>, <tau_s> "
-        "and shape index against R for each locomotion strategy",
+        choices=list(WHERE),
+        help="sensitivity: the quick design over one of the paper's unknowns at a time (bot "
+        "size, k, Lambda_c, lambda, rotation, friction); beyond: static friction and the "
+        "arena; constriction: how often one cell passes a gap in a wall, against the gap's "
+        "width and R; crowding: the cells' D hat and <tau_g> against area fraction and R; "
+        "strategies: D hat, <tau_g>, <tau_s> and shape index against R for each locomotion "
+        "strategy",
     )
-    p.add_argument(
-        "--quick",
-        action="store_true",
-        help="the grid studies: a look (constriction ~1 min, crowding ~1 h, strategies "
-        "~8 min on 2 cores) instead of the full grid (20 min; ~12 h; ~1.5 h)",
-    )
-    grid = p.add_argument_group(
-        "constriction, crowding and strategies grids (over the full or --quick design)"
-    )
-    grid.add_argument("--radii", metavar="R1,R2,...", help="cell radii R (cm)")
-    grid.add_argument(
-        "--gaps",
-        metavar="G1,G2,...",
-        help="constriction: gap widths w / 2R, in (0, 1.5]; 1.5 is no partition",
-    )
-    grid.add_argument(
-        "--fractions", metavar="F1,F2,...", help="crowding: area fractions, in (0, 0.785)"
-    )
-    grid.add_argument("--cells", type=int, help="crowding: cells per box (a square number)")
-    grid.add_argument(
-        "--strategies",
-        metavar="P1,P2,...",
-        help="strategies: driving protocols (default: run_and_tumble, graspion, "
-        "bump_and_turn, active_brownian, chiral)",
-    )
-    grid.add_argument("--realizations", type=int, help="realizations per grid point")
-    grid.add_argument("--duration", type=float, help="duration of each realization (s)")
-    p.add_argument(
-        "--only",
-        metavar="NAMES",
-        help="comma-separated variants to run beside the defaults (default: all: "
-        "bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
-        "lambda_1e-4, pivot, coulomb, gamma_mem_4.7e-5, torque_1e-3, pivot_coulomb)",
-    )
-    _add_beyond(p)
+    design = p.add_argument_group("the design (each flag belongs to some studies)")
+    for name, (metavar, help) in DESIGN_FLAGS.items():
+        if metavar is None:
+            design.add_argument(f"--{name}", action="store_true", help=help)
+        else:
+            kind = {"cells": int, "realizations": int, "duration": float}.get(name, str)
+            design.add_argument(f"--{name}", metavar=metavar, type=kind, help=help)
+    _add_common(p)
     p.set_defaults(func=_cmd_study)
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from softcell.studies import grid_studies
-    from softcell.studies.sensitivity import VARIANTS, sensitivity, variants_named
+    from softcell.studies import studies
 
-    grids = grid_studies()
-    if args.study in grids:
-        return _grid_study(args, grids)
-    given = [f for f in (*GRID_FLAGS, *_own_flags(grids)) if getattr(args, f)]
-    if given:
-        owners = [s for s, study in grids.items() if given[0] in study.flags] or list(grids)
-        raise SoftcellError(
-            f"--{given[0]} belongs to "
-            + " or ".join(f"'study {s}'" for s in owners)
-            + "; 'study sensitivity' runs the quick design"
-        )
-    variants = VARIANTS if args.only is None else variants_named(flags.names(args.only))
-    report = sensitivity(
-        args.output,
-        seed=args.seed,
-        workers=args.workers,
-        variants=variants,
-        overwrite=args.overwrite,
-        progress=not args.quiet,
-        log=flags.note,
-    )
-    print(f"done: {report}")
-    return 0
-
-
-#: Flags every grid study takes over its design.
-GRID_FLAGS = ("quick", "radii", "realizations", "duration")
-
-
-def _own_flags(grids: dict[str, Any]) -> tuple[str, ...]:
-    """The flags that belong to one grid study alone."""
-    return tuple(f for study in grids.values() for f in study.flags)
-
-
-def _grid_changes(args: argparse.Namespace, study: Any, grids: dict[str, Any]) -> dict[str, Any]:
-    """The design fields of ``study`` that the grid flags given change (lists as tuples)."""
+    known = studies()
+    study = known[args.study]
+    given = [f for f in DESIGN_FLAGS if getattr(args, f) not in (None, False)]
+    for name in given:
+        if name not in study.offered():
+            owners = [f"'study {s}'" for s, other in known.items() if name in other.offered()]
+            raise SoftcellError(
+                f"--{name} does not belong to 'study {args.study}'; it belongs to "
+                + " or ".join(owners)
+            )
     changes = {
-        "radii": flags.numbers("--radii", args.radii),
-        "gaps": flags.numbers("--gaps", args.gaps),
-        "fractions": flags.numbers("--fractions", args.fractions),
-        "cells": args.cells,
-        "strategies": flags.names(args.strategies),
-        "realizations": args.realizations,
-        "duration": args.duration,
+        name: READ.get(name, lambda _, v: v)(f"--{name}", getattr(args, name))
+        for name in given
+        if name != "quick"
     }
-    others = _own_flags(grids)
-    return {
-        k: tuple(v) if isinstance(v, list) else v
-        for k, v in changes.items()
-        if v is not None and (k in study.flags or k not in others)
-    }
+    changes = {k: tuple(v) if isinstance(v, list) else v for k, v in changes.items()}
+    return _run(study, args, study.design(args.quick, **changes))
 
 
-def _grid_study(args: argparse.Namespace, grids: dict[str, Any]) -> int:
-    """``softcell study constriction``, ``crowding`` or ``strategies``: the full or quick
-    grid, changed by the grid flags given."""
-    study = grids[args.study]
-    if args.only is not None:
-        raise SoftcellError(f"--only names sensitivity variants; 'study {args.study}' has none")
-    foreign = [
-        f for other in grids.values() if other is not study for f in other.flags
-        if getattr(args, f) is not None
-    ]  # fmt: skip
-    if foreign:
-        raise SoftcellError(f"--{foreign[0]} does not belong to 'study {args.study}'")
+def _run(study: Any, args: argparse.Namespace, design: Any) -> int:
     report = study.run(
         args.output,
-        design=study.design(args.quick, **_grid_changes(args, study, grids)),
+        design=design,
         seed=args.seed,
         workers=args.workers,
         overwrite=args.overwrite,
@@ -140,44 +117,29 @@ def _grid_study(args: argparse.Namespace, grids: dict[str, Any]) -> int:
 
 
 def _add_beyond(p: argparse.ArgumentParser) -> None:
-    flags.output(p, "results directory (one reproduction per variant inside)")
-    flags.overwrite(
-        p,
-        "recompute what the directory holds from another seed or version, or write "
-        "into a non-empty directory the study did not make",
-    )
-    flags.seed(p, "root seed of every variant")
-    flags.workers(p, "local worker processes (default: every core)")
-    flags.quiet(p)
+    _add_common(p)
     p.set_defaults(func=_cmd_beyond)
 
 
 def _cmd_beyond(args: argparse.Namespace) -> int:
-    from softcell.studies.friction_and_arena import beyond
+    from softcell.studies import studies
 
-    report = beyond(
-        args.output,
-        seed=args.seed,
-        workers=args.workers,
-        overwrite=args.overwrite,
-        progress=not args.quiet,
-        log=flags.note,
-    )
-    print(f"done: {report}")
-    return 0
+    study = studies()["beyond"]
+    return _run(study, args, study.design(False))
 
 
 #: The verbs of this module: the one-line help of each, and what adds its flags.
 VERBS = {
     "beyond": (
-        "the quick design with static friction (3 thresholds) and in the arena, beside "
-        "the paper's model",
+        "the same as 'study beyond': the quick design with static friction (3 thresholds) "
+        "and in the arena, beside the paper's model",
         _add_beyond,
     ),
     "study": (
         "'study sensitivity': which of the paper's findings its unknowns decide, one "
-        "unknown at a time; 'study constriction': does softness let a cell through a gap; "
-        "'study crowding': D hat and <tau_g> against area fraction",
+        "unknown at a time; 'study beyond': static friction and the arena; 'study "
+        "constriction': does softness let a cell through a gap; 'study crowding': D hat and "
+        "<tau_g> against area fraction; 'study strategies': locomotion strategies",
         _add_study,
     ),
 }

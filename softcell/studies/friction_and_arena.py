@@ -1,4 +1,4 @@
-"""Beyond the paper's model: what static friction and the arena change (``softcell beyond``).
+"""Beyond the paper's model: what static friction and the arena change (``softcell study beyond``).
 
 The quick design (every radius, 5 realizations of 240 s, one root seed for all variants, so
 that differences are not noise) is run with
@@ -31,6 +31,7 @@ from softcell.model.configuration import DEFAULT_COMPONENTS
 from softcell.paper.findings import cell_values
 from softcell.paper.reproduce import QUICK, Design
 from softcell.studies.figures import friction_figures
+from softcell.studies.protocol import VariantStudy
 from softcell.studies.variants import Variant, run_variants
 
 
@@ -354,3 +355,22 @@ def _markdown(variants, results, figures) -> str:
         *_arena_blocks(results, results[variants[0].name]["free_renewal_d"]),
     ]
     return markdown(blocks) + "\n"
+
+
+class Beyond(VariantStudy):
+    """``softcell study beyond``: static friction and the arena beside the paper's model
+    (:func:`beyond`, with the long free-bot runs)."""
+
+    name = "beyond"
+    variants = VARIANTS
+    base = QUICK
+
+    def compare(self, out, design, *, seed, workers, overwrite, progress, log) -> Path:
+        return beyond(
+            out, seed=seed, workers=workers, variants=design.variants, base=design.base,
+            overwrite=overwrite, progress=progress, log=log,
+        )  # fmt: skip
+
+
+#: The study, as ``softcell study beyond`` runs it.
+STUDY = Beyond()

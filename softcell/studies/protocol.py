@@ -1,11 +1,17 @@
-"""What a grid study is: a design (quick and full), its points, running them, and a summary
-(measurements, a JSON record, a figure and a page).
+"""What a study is: a name, its designs (a quick look and the full one), the flags that change
+a design, and a run that writes the study's page (``softcell study NAME``).
 
-A study subclasses :class:`GridStudy` and says what is its own: the points of a design, what
-one point measured, the context and conclusions its record carries, its figure and its page.
-Running and summarising are the same for every study: every point is planned before any runs,
-all of them from one root seed on one local cluster (:func:`~softcell.studies.variants.run_points`),
-and the summary is written atomically as ``<name>.json``, ``<name>.png`` and ``<name>.md``.
+Every study is a :class:`Study`. Two kinds share the rest of their work:
+
+- a :class:`GridStudy` (constriction, crowding, strategies) says what is its own: the points of
+  a design, what one point measured, the context and conclusions its record carries, its
+  figure and its page. Running and summarising are the same for every grid study: every point
+  is planned before any runs, all of them from one root seed on one local cluster
+  (:func:`~softcell.studies.variants.run_points`), and the summary is written atomically as
+  ``<name>.json``, ``<name>.png`` and ``<name>.md``;
+- a :class:`VariantStudy` (sensitivity, beyond) runs model variants of the paper's design side
+  by side, each a reproduction in its own folder from one root seed
+  (:func:`~softcell.studies.variants.run_variants`), and compares them.
 """
 
 from __future__ import annotations
@@ -18,24 +24,110 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 
-class GridStudy:
-    """The protocol of a grid study (``softcell study NAME``).
+class Study:
+    """The protocol of every study (``softcell study NAME``).
 
-    A study class sets ``name`` (its command, ``softcell study NAME``, and the name of its
-    files), ``designs`` (its designs by name: ``"quick"``, a look, and ``"full"``; a design is
-    a frozen dataclass with ``name``, ``radii``, ``realizations``, ``duration`` and a
-    ``check()`` that refuses a grid that cannot run), ``default`` (the design :meth:`run`
-    runs when given none), ``own`` (the model parameters the study sets itself, refused
-    among the caller's) and ``flags`` (the design's fields that only this study has, such as
-    ``gaps`` or ``fractions``, which the command line offers beside ``radii``,
-    ``realizations`` and ``duration``).
+    A study sets ``name`` (its command and the name of its files), ``designs`` (its designs
+    by name, ``"quick"`` and ``"full"``; a design is a frozen dataclass with a ``name`` and a
+    ``check()`` that refuses one that cannot run), ``default`` (the design :meth:`run` runs
+    when given none), ``own`` (the model parameters the study sets itself, refused among the
+    caller's) and ``flags`` (the fields of its design that the command line offers, as
+    ``--FIELD``).
     """
 
     name: ClassVar[str]
     designs: ClassVar[dict[str, Any]]
     default: ClassVar[str] = "full"
-    own: ClassVar[tuple[str, ...]] = ("radius", "duration")
+    own: ClassVar[tuple[str, ...]] = ()
     flags: ClassVar[tuple[str, ...]] = ()
+
+    def offered(self) -> tuple[str, ...]:
+        """The fields of the design that the command line offers (``--FIELD``)."""
+        return self.flags
+
+    def design(self, quick: bool, **changes: Any) -> Any:
+        """The quick or the full design, with some of its fields changed.
+
+        Parameters
+        ----------
+        quick : bool
+            The quick design (a look) rather than the full one.
+        **changes
+            Fields of the design and their new values (named ``"<name>, changed"``).
+
+        Returns
+        -------
+        design
+            The study's design, changed.
+        """
+        design = self.designs["quick" if quick else "full"]
+        return replace(design, name=f"{design.name}, changed", **changes) if changes else design
+
+    def run(
+        self,
+        out: str | os.PathLike[str],
+        *,
+        design: Any = None,
+        seed: int = 0,
+        workers: int | None = None,
+        parameters: dict[str, Any] | None = None,
+        overwrite: bool = False,
+        progress: bool = True,
+        log: Callable[[str], None] | None = print,
+    ) -> Path:
+        """Run the study into ``out`` and write its page.
+
+        Parameters
+        ----------
+        out : path-like
+            Results directory: one folder per point or variant (resumable as ``softcell
+            simulate``'s are), and the study's ``<name>.md`` with its record and figures.
+        design : design, optional
+            What to run (default: the design the study names in ``default``).
+        seed : int
+            Root seed (every point or variant draws the same streams).
+        workers : int, optional
+            Local worker processes (default: every core).
+        parameters : dict, optional
+            Model parameters over the defaults (units of ``softcell params``); those named in
+            ``own`` are the study's.
+        overwrite : bool
+            Recompute what ``out`` holds from another seed, version or request, and write
+            into a non-empty folder the study did not make.
+        progress : bool
+            Show a progress bar per run, in simulated seconds.
+        log : callable, optional
+            Receives a line per point or variant and what ``softcell simulate`` reports.
+
+        Returns
+        -------
+        Path
+            ``out / "<name>.md"``.
+
+        Raises
+        ------
+        SoftcellError
+            For a design that cannot run (its ``check``), a bad parameter (every point is
+            planned before anything runs), or a folder another study or seed made.
+        """
+        raise NotImplementedError
+
+
+class GridStudy(Study):
+    """A study over a grid of points, each a :class:`~softcell.model.configuration.RunConfig`
+    simulated with the design's realizations.
+
+    Its designs have ``radii``, ``realizations`` and ``duration`` besides their own fields
+    (``gaps``, ``fractions``, ...): ``flags`` lists the fields of its own.
+    """
+
+    own: ClassVar[tuple[str, ...]] = ("radius", "duration")
+    #: The fields every grid design has, offered by the command line beside ``flags``.
+    common: ClassVar[tuple[str, ...]] = ("quick", "radii", "realizations", "duration")
+
+    def offered(self) -> tuple[str, ...]:
+        """The design fields the command line offers: the common ones and ``flags``."""
+        return (*self.common, *self.flags)
 
     # -- what a study says --------------------------------------------------------------------
 
@@ -68,25 +160,7 @@ class GridStudy:
         """The study's page (Markdown) from its ``result`` and its figure's ``caption``."""
         raise NotImplementedError
 
-    # -- what every study does ----------------------------------------------------------------
-
-    def design(self, quick: bool, **changes: Any) -> Any:
-        """The quick or the full design, with some of its fields changed.
-
-        Parameters
-        ----------
-        quick : bool
-            The quick design (a look) rather than the full one.
-        **changes
-            Fields of the design and their new values (named ``"<name>, changed"``).
-
-        Returns
-        -------
-        design
-            The study's design, changed.
-        """
-        design = self.designs["quick" if quick else "full"]
-        return replace(design, name=f"{design.name}, changed", **changes) if changes else design
+    # -- what every grid study does ----------------------------------------------------------
 
     def run(
         self,
@@ -198,3 +272,107 @@ class GridStudy:
         with atomic_write(page) as tmp:
             tmp.write_text(self.page(result, caption), encoding="utf-8")
         return page
+
+
+class VariantStudy(Study):
+    """A study of model variants of the paper's design, each reproduced in its own folder
+    from one root seed and compared with the first, the reference.
+
+    Its design is a :class:`~softcell.studies.variants.VariantDesign`; it has one, the
+    quick design of the paper over every variant the study knows (``variants``), and the
+    command line's ``--only NAMES`` keeps some of them (:meth:`named`). A study sets
+    ``variants``, ``base`` (the paper's design every variant runs) and ``compare``, the
+    function that runs its variants and writes its page.
+    """
+
+    default: ClassVar[str] = "full"
+    flags: ClassVar[tuple[str, ...]] = ("only",)
+    variants: ClassVar[tuple[Any, ...]]
+    base: ClassVar[Any]
+
+    @property
+    def designs(self) -> dict[str, Any]:  # type: ignore[override]
+        """The one design: every variant over ``base``."""
+        from softcell.studies.variants import VariantDesign
+
+        design = VariantDesign("every variant", self.variants, self.base)
+        return {"full": design}
+
+    def design(self, quick: bool, **changes: Any) -> Any:
+        """The study's design, with ``only`` (names of variants) keeping some of them.
+
+        Raises
+        ------
+        SoftcellError
+            For ``quick`` (the study runs the paper's quick design already) or a change of
+            another field than ``only``.
+        """
+        from softcell.errors import SoftcellError
+
+        if quick:
+            raise SoftcellError(
+                f"--quick does not belong to 'study {self.name}': it runs the paper's quick "
+                "design already"
+            )
+        design = self.designs["full"]
+        only = changes.pop("only", None)
+        if changes:
+            raise SoftcellError(f"'study {self.name}' has no design field {next(iter(changes))}")
+        if only is None:
+            return design
+        return replace(design, name="some variants", variants=self.named(only))
+
+    def named(self, names: Any) -> tuple[Any, ...]:
+        """The study's variants called ``names`` (the reference always first).
+
+        Raises
+        ------
+        SoftcellError
+            For an unknown name, or names that leave nothing to compare.
+        """
+        from softcell.studies.variants import variants_named
+
+        return variants_named(self.variants, list(names), self.name)
+
+    def compare(
+        self,
+        out: Path,
+        design: Any,
+        *,
+        seed: int,
+        workers: int | None,
+        overwrite: bool,
+        progress: bool,
+        log: Callable[[str], None] | None,
+    ) -> Path:
+        """Run the variants of ``design`` into ``out`` and write the comparison (the options
+        as :meth:`run` takes them); the path of its page."""
+        raise NotImplementedError
+
+    def run(
+        self,
+        out: str | os.PathLike[str],
+        *,
+        design: Any = None,
+        seed: int = 0,
+        workers: int | None = None,
+        parameters: dict[str, Any] | None = None,
+        overwrite: bool = False,
+        progress: bool = True,
+        log: Callable[[str], None] | None = print,
+    ) -> Path:
+        design = self.designs[self.default] if design is None else design
+        design.check()
+        if parameters:
+            from softcell.studies.variants import own_parameters
+
+            base = design.base
+            varied = {k for v in design.variants for k in v.parameters}
+            given = own_parameters(parameters, self.name, (*self.own, *sorted(varied)))
+            design = replace(design, base=replace(base, parameters={**base.parameters, **given}))
+        return self.compare(
+            Path(out), design, seed=seed, workers=workers, overwrite=overwrite,
+            progress=progress, log=log,
+        )  # fmt: skip
+
+    run.__doc__ = Study.run.__doc__

@@ -32,6 +32,7 @@ from softcell.errors import SoftcellError
 from softcell.io.pages import Block, markdown
 from softcell.paper.reproduce import QUICK, Design
 from softcell.studies.figures import values_figure, verdicts_figure
+from softcell.studies.protocol import VariantStudy
 from softcell.studies.variants import Variant, run_variants
 
 #: The quick design without its video: the study needs the simulations' findings only.
@@ -137,22 +138,6 @@ DEFAULTS = {
 }
 #: The bot's MSD inside the membrane is compared with the free bot's at this lag (s).
 SHORT_LAG = 0.1
-
-
-def variants_named(names: Sequence[str]) -> tuple[Variant, ...]:
-    """The variants of :data:`VARIANTS` called ``names`` (``default`` always first)."""
-    known = {v.name: v for v in VARIANTS}
-    if not [n for n in names if n != "default"]:
-        raise SoftcellError(
-            f"--only {','.join(names)!r} names no variant to compare with the default; the "
-            f"study's variants are {', '.join(n for n in known if n != 'default')}"
-        )
-    bad = [n for n in names if n not in known]
-    if bad:
-        raise SoftcellError(
-            f"unknown variant(s) {', '.join(bad)}; the study's variants are {', '.join(known)}"
-        )
-    return (known["default"], *(known[n] for n in dict.fromkeys(names) if n != "default"))
 
 
 def sensitivity(
@@ -571,3 +556,21 @@ def _markdown(variants, results, figures, seed: int, base: Design) -> str:
         Block("images", [(f, f"figures/{f}") for f in figures]),
     ]
     return markdown(blocks) + "\n"
+
+
+class Sensitivity(VariantStudy):
+    """``softcell study sensitivity``: the paper's unknowns one at a time (:func:`sensitivity`)."""
+
+    name = "sensitivity"
+    variants = VARIANTS
+    base = BASE
+
+    def compare(self, out, design, *, seed, workers, overwrite, progress, log) -> Path:
+        return sensitivity(
+            out, seed=seed, workers=workers, variants=design.variants, base=design.base,
+            overwrite=overwrite, progress=progress, log=log,
+        )  # fmt: skip
+
+
+#: The study, as ``softcell study sensitivity`` runs it.
+STUDY = Sensitivity()

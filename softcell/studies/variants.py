@@ -3,15 +3,16 @@
 Each :class:`Variant` is the base design with some components and parameters changed; each
 runs into its own folder by :func:`softcell.paper.reproduce.reproduce` (resumable, with
 its own report), from the same root seed, so that the variants share their random numbers
-and their differences are the model's, not noise. ``softcell beyond`` and ``softcell study
-sensitivity`` are studies; this module holds what they share.
+and their differences are the model's, not noise. ``softcell study sensitivity`` and
+``softcell study beyond`` are such studies (:class:`~softcell.studies.protocol.VariantStudy`);
+this module holds what they share, and what they share with the grid studies.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,55 @@ class Variant:
             components={**DEFAULT_COMPONENTS, **self.components},
             parameters={**base.parameters, **self.parameters},
         )
+
+
+@dataclass(frozen=True)
+class VariantDesign:
+    """What a variant study runs: its ``variants`` (the first is the reference the others
+    are compared with), each over the design ``base``."""
+
+    name: str
+    variants: tuple[Variant, ...]
+    base: Design
+
+    def check(self) -> None:
+        """Refuse a design with nothing to compare with its reference, or a variant named
+        twice."""
+        names = [v.name for v in self.variants]
+        if len(names) < 2:
+            raise SoftcellError(
+                f"variants {', '.join(names) or '(none)'}: a variant study compares at least "
+                "one variant with its reference"
+            )
+        if len(set(names)) < len(names):
+            raise SoftcellError(f"variants {', '.join(names)}: each variant runs once")
+
+
+def variants_named(
+    known: tuple[Variant, ...], names: Sequence[str], study: str
+) -> tuple[Variant, ...]:
+    """The variants of ``known`` called ``names``, after ``known``'s first (the reference,
+    always run), for the study ``study`` (named in errors).
+
+    Raises
+    ------
+    SoftcellError
+        For an unknown name, or names that leave nothing to compare with the reference.
+    """
+    by_name = {v.name: v for v in known}
+    reference = known[0].name
+    if not [n for n in names if n != reference]:
+        raise SoftcellError(
+            f"--only {','.join(names)!r} names no variant to compare with the {reference}; the "
+            f"{study} study's variants are {', '.join(n for n in by_name if n != reference)}"
+        )
+    bad = [n for n in names if n not in by_name]
+    if bad:
+        raise SoftcellError(
+            f"unknown variant(s) {', '.join(bad)}; the {study} study's variants are "
+            f"{', '.join(by_name)}"
+        )
+    return (known[0], *(by_name[n] for n in dict.fromkeys(names) if n != reference))
 
 
 #: What a study's folder was made for: the study and its seed (checked on a rerun, as a

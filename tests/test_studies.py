@@ -1,0 +1,81 @@
+"""One study protocol: every study is found by name and run through it, from Python and from
+the command line (the studies' own physics is tested in their own files)."""
+
+from __future__ import annotations
+
+import pytest
+
+from softcell.cli import main
+from softcell.errors import SoftcellError
+from softcell.studies import WHERE, studies
+from softcell.studies.protocol import GridStudy, Study, VariantStudy
+from softcell.studies.variants import VariantDesign
+
+
+def test_every_study_is_found_by_its_name_and_follows_the_protocol():
+    found = studies()
+    assert list(found) == ["sensitivity", "beyond", "constriction", "crowding", "strategies"]
+    for name, study in found.items():
+        assert isinstance(study, Study) and study.name == name
+        assert isinstance(study, VariantStudy) == (name in ("sensitivity", "beyond"))
+        assert isinstance(study, GridStudy) == (name not in ("sensitivity", "beyond"))
+        study.design(quick=False).check()
+    assert set(WHERE) == set(found)
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """Each variant study's comparison replaced by a record of what it was asked to run."""
+    asked = []
+
+    def compare(self, out, design, **options):
+        asked.append((self.name, out, design, options))
+        return out / f"{self.name}.md"
+
+    for study in studies().values():
+        if isinstance(study, VariantStudy):
+            monkeypatch.setattr(type(study), "compare", compare)
+    return asked
+
+
+def test_the_command_line_runs_a_variant_study_through_the_protocol(tmp_path, captured):
+    assert main(["study", "beyond", "-o", str(tmp_path / "b"), "--only", "arena", "--quiet"]) == 0
+    assert main(["beyond", "-o", str(tmp_path / "c"), "--seed", "3", "--quiet"]) == 0
+    (name, out, some, options), (_, _, every, again) = captured
+    assert name == "beyond" and out == tmp_path / "b"
+    assert [v.name for v in some.variants] == ["viscous", "arena"]  # the reference first
+    assert [v.name for v in every.variants] == [v.name for v in studies()["beyond"].variants]
+    assert options["seed"] == 0 and again["seed"] == 3 and again["progress"] is False
+
+
+def test_a_variant_study_takes_parameters_that_no_variant_sets(tmp_path, captured):
+    study = studies()["sensitivity"]
+    study.run(tmp_path, parameters={"sample_every": 0.02})
+    (_, _, design, _) = captured[0]
+    assert design.base.parameters["sample_every"] == 0.02
+    assert "sample_every" not in study.base.parameters  # the study's base is untouched
+    with pytest.raises(SoftcellError, match="'bending_stiffness' is set by the sensitivity"):
+        study.run(tmp_path, parameters={"bending_stiffness": 0.1})
+
+
+@pytest.mark.parametrize(
+    "argv,words",
+    [
+        (["sensitivity", "--quick"], "--quick does not belong to 'study sensitivity'"),
+        (["beyond", "--radii", "4"], "it belongs to 'study constriction' or 'study crowding'"),
+        (["crowding", "--only", "k_0.18"], "it belongs to 'study sensitivity' or 'study beyond'"),
+        (["beyond", "--only", "viscous"], "names no variant to compare with the viscous"),
+        (["sensitivity", "--only", "arena"], "unknown variant(s) arena"),
+    ],
+)
+def test_a_flag_of_another_study_is_refused_in_one_line(tmp_path, capsys, argv, words):
+    code = main(["study", argv[0], "-o", str(tmp_path / "o"), *argv[1:]])
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_variant_design_compares_something():
+    one = studies()["beyond"].variants[:1]
+    with pytest.raises(SoftcellError, match="compares at least one variant"):
+        VariantDesign("one", one, studies()["beyond"].base).check()
