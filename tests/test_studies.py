@@ -79,3 +79,12 @@ def test_a_variant_design_compares_something():
     one = studies()["beyond"].variants[:1]
     with pytest.raises(SoftcellError, match="compares at least one variant"):
         VariantDesign("one", one, studies()["beyond"].base).check()
+
+
+def test_the_help_of_only_names_every_variant_of_both_variant_studies():
+    from softcell.cli.studies import DESIGN_FLAGS
+
+    help = DESIGN_FLAGS["only"][1]
+    for study in studies().values():
+        if isinstance(study, VariantStudy):
+            assert all(v.name in help for v in study.variants[1:]), study.name

@@ -32,7 +32,8 @@ DESIGN_FLAGS: dict[str, tuple[str | None, str]] = {
         "NAMES",
         "sensitivity, beyond: comma-separated variants to run beside the reference (default: "
         "all; sensitivity: bot_2.5x1.5, bot_3.5x2.5, k_0.057, k_0.18, cutoff_12, cutoff_19, "
-        "lambda_1e-4, pivot, coulomb, gamma_mem_4.7e-5, torque_1e-3, pivot_coulomb; beyond: "
+        "lambda_1e-4, pivot, coulomb, gamma_mem_4.7e-5, torque_1e-3, torque_1e-3_k_0.057, "
+        "force_x0.5, pivot_coulomb; beyond: "
         "coulomb_3e-05, coulomb_0.0001, coulomb_0.0003, arena)",
     ),
 }
