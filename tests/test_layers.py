@@ -32,7 +32,7 @@ LEVELS: tuple[tuple[str, ...], ...] = (
     ("video",),
     ("runner",),
     ("paper",),
-    ("studies",),
+    ("studies", "fit"),
     ("plugin",),
     ("testing", "cli"),
     ("__main__", "__init__"),

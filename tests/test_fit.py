@@ -1,0 +1,142 @@
+"""Fitting the unknowns: priors over parameters, and the statistics data and simulations are
+compared by."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy import integrate
+
+from softcell.components.registry import default_registry
+from softcell.errors import ConfigError
+from softcell.fit.priors import Prior, make_prior, parse_prior, priors_from_table
+from softcell.fit.statistics import observed
+from softcell.model.configuration import DEFAULT_COMPONENTS
+from softcell.model.parameters import MODEL_PARAMETERS
+
+
+@pytest.fixture(scope="module")
+def specs():
+    return {**MODEL_PARAMETERS, **default_registry().parameter_specs(DEFAULT_COMPONENTS)}
+
+
+def test_a_prior_over_decades_is_log_uniform_and_a_narrow_one_uniform(specs):
+    wide = parse_prior("bending_stiffness=0.01:1", specs)
+    assert wide == Prior("bending_stiffness", 0.01, 1.0, "N cm2", "log")
+    narrow = parse_prior("membrane_friction=1e-5:1e-4", specs)  # exactly a decade
+    assert narrow.scale == "linear" and narrow.unit == "N s cm-2"
+    assert parse_prior("radius=4:40", specs, scale="linear").scale == "linear"
+
+
+def test_a_prior_in_another_unit_is_converted_to_the_parameters(specs):
+    # 1e-6 N m2 = 1e-6 x 1e4 N cm2
+    prior = parse_prior("bending_stiffness=1e-6:1e-4 N m2", specs)
+    assert prior.low == pytest.approx(0.01, rel=1e-12) and prior.high == pytest.approx(1.0)
+    assert prior.unit == "N cm2"
+
+
+@pytest.mark.parametrize(
+    "text,words",
+    [
+        ("bending_stiffnes=1:2", "did you mean 'bending_stiffness'"),
+        ("bending_stiffness=1:0.5", "the range 1:0.5 N cm2 is empty"),
+        ("bending_stiffness=1:1", "is empty"),
+        ("bending_stiffness=0.1:1 furlongs per", "unit 'furlongs per' does not parse"),
+        ("bending_stiffness=0.1:1 m", "unit 'm' is not convertible to 'N cm2'"),
+        ("bending_stiffness=-1:1", "must be > 0 N cm2"),
+        ("bending_stiffness=0.1", "must be NAME=LOW:HIGH"),
+        ("bending_stiffness=a:b", "holds no two numbers"),
+        ("nodes=16:32", "a fit varies real parameters"),
+    ],
+)
+def test_a_bad_prior_is_one_line_naming_it(specs, text, words):
+    with pytest.raises(ConfigError) as caught:
+        parse_prior(text, specs)
+    assert words in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_a_log_prior_needs_a_positive_low_end():
+    specs = default_registry().parameter_specs()  # static friction may be 0: a log prior not
+    assert make_prior("membrane_static_friction", 0.0, 1e-3, specs).scale == "linear"
+    with pytest.raises(ConfigError, match="needs LOW > 0"):
+        make_prior("membrane_static_friction", 0.0, 1e-3, specs, scale="log")
+
+
+def test_a_priors_table_gives_the_same_priors_as_the_flags(specs):
+    table = {
+        "bending_stiffness": {"low": 1e-6, "high": 1e-4, "unit": "N m2"},
+        "membrane_friction": {"low": 1e-5, "high": 1e-4, "scale": "log"},
+    }
+    priors = priors_from_table(table, specs)
+    assert priors[0] == parse_prior("bending_stiffness=1e-6:1e-4 N m2", specs)
+    assert priors[1].scale == "log"
+    with pytest.raises(ConfigError, match=r"must be a table \{low, high, unit\?, scale\?\}"):
+        priors_from_table({"bending_stiffness": 0.1}, specs)
+
+
+@given(
+    low=st.floats(1e-6, 1e3),
+    ratio=st.floats(1.01, 1e6),
+    u=st.floats(0.0, 1.0),
+    log=st.booleans(),
+)
+def test_quantile_inverts_value_and_the_value_stays_in_range(low, ratio, u, log):
+    prior = Prior("x", low, low * ratio, "1", "log" if log else "linear")
+    v = prior.value(u)
+    assert low * (1 - 1e-12) <= v <= low * ratio * (1 + 1e-12)
+    assert prior.quantile(v) == pytest.approx(u, abs=1e-9)
+
+
+@pytest.mark.parametrize("scale", ["log", "linear"])
+def test_the_prior_density_integrates_to_one_and_vanishes_outside(scale):
+    prior = Prior("x", 0.02, 5.0, "1", scale)
+    total, _ = integrate.quad(lambda v: math.exp(prior.log_density(v)), 0.02, 5.0, limit=200)
+    assert total == pytest.approx(1.0, rel=1e-8)
+    assert prior.log_density(0.019) == -np.inf and prior.log_density(5.01) == -np.inf
+    # uniform in log(value) for the log prior: density x value is constant
+    v = np.array([0.05, 0.5, 4.0])
+    d = np.exp(prior.log_density(v))
+    assert np.ptp(d * v if scale == "log" else d) == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.fixture(scope="module")
+def analysis():
+    import softcell
+    from softcell.testing.synthetic import stop_and_go_dataset
+
+    ds = stop_and_go_dataset(
+        np.random.default_rng(1),
+        np.arange(0, 120, 0.04),
+        realizations=6,
+        speed=2.0,
+        mean_go=1.0,
+        mean_stop=0.5,
+    )
+    return softcell.analyze(ds)
+
+
+def test_the_statistics_are_the_analysis_per_realization_values(analysis):
+    seen = observed(analysis, ("mean_speed", "mean_go_duration", "ipr_mean"))
+    assert seen.each.shape == (1, 6, 3) and seen.units == ("cm s-1", "s", "1")
+    each = analysis["mean_speed_realization"].sel(body="cell").values
+    assert np.array_equal(seen.each[0, :, 0], each)
+    assert seen.mean[0, 0] == pytest.approx(each.mean(), rel=1e-12)
+    assert seen.error[0, 0] == pytest.approx(each.std(ddof=1) / math.sqrt(6), rel=1e-12)
+
+
+def test_a_statistic_the_data_lacks_or_an_unknown_one_is_refused(analysis):
+    with pytest.raises(ConfigError, match="did you mean 'mean_speed'"):
+        observed(analysis, ("mean_sped",))
+    lacking = analysis.drop_vars("mean_go_duration_realization")
+    with pytest.raises(ConfigError, match="the data lacks the statistic 'mean_go_duration'"):
+        observed(lacking, ("mean_go_duration",))
+    undefined = analysis.copy()
+    undefined["ipr_mean_realization"] = undefined["ipr_mean_realization"] * np.nan
+    with pytest.raises(ConfigError, match="undefined in every realization"):
+        observed(undefined, ("ipr_mean",))
+    with pytest.raises(ConfigError, match="at least one statistic"):
+        observed(analysis, ())
