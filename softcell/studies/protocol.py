@@ -278,7 +278,7 @@ class VariantStudy(Study):
     """A study of model variants of the paper's design, each reproduced in its own folder
     from one root seed and compared with the first, the reference.
 
-    Its design is a :class:`~softcell.studies.variants.VariantDesign`; it has one, the
+    Its design is a ``VariantDesign`` (``softcell.studies.variants``); it has one, the
     quick design of the paper over every variant the study knows (``variants``), and the
     command line's ``--only NAMES`` keeps some of them (:meth:`named`). A study sets
     ``variants``, ``base`` (the paper's design every variant runs) and ``compare``, the
@@ -324,6 +324,15 @@ class VariantStudy(Study):
 
     def named(self, names: Any) -> tuple[Any, ...]:
         """The study's variants called ``names`` (the reference always first).
+
+        Parameters
+        ----------
+        names : sequence of str
+            Names of the study's variants (``--only``).
+
+        Returns
+        -------
+        tuple of Variant
 
         Raises
         ------

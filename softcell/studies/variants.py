@@ -51,8 +51,17 @@ class Variant:
 
 @dataclass(frozen=True)
 class VariantDesign:
-    """What a variant study runs: its ``variants`` (the first is the reference the others
-    are compared with), each over the design ``base``."""
+    """What a variant study runs.
+
+    Parameters
+    ----------
+    name : str
+        What the design is called (its study's logs).
+    variants : tuple of Variant
+        The variants; the first is the reference the others are compared with.
+    base : Design
+        The paper's design every variant runs (radii, realizations, duration, ...).
+    """
 
     name: str
     variants: tuple[Variant, ...]
