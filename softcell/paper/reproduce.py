@@ -43,6 +43,7 @@ from softcell.errors import SoftcellError
 from softcell.model.configuration import DEFAULT_COMPONENTS, RunConfig
 from softcell.paper.experiment import VideoDesign, experimental_pipeline
 from softcell.paper.report import PIVOTS, write_report
+from softcell.runner.points import worker_count
 from softcell.runner.side_process import Alongside
 
 if TYPE_CHECKING:
@@ -212,20 +213,6 @@ def _check_design(design: Design) -> None:
             f"the video's radius {design.video.radius:g} cm is not among the "
             f"design's radii {list(design.radii)}"
         )
-
-
-def worker_count(workers: int | None, scheduler: str | None) -> int | None:
-    """The local worker processes: as given, or every core when neither they nor a scheduler
-    are given."""
-    if workers is not None and workers < 1:
-        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
-    if scheduler is None and workers is None:
-        return (
-            len(os.sched_getaffinity(0))
-            if hasattr(os, "sched_getaffinity")
-            else (os.cpu_count() or 1)
-        )
-    return workers
 
 
 def _bytes_to_write(

@@ -222,33 +222,20 @@ def run_points(
     """Run a grid study's points: each folder of ``points`` (under ``out``) gets its
     (label, RunConfig) simulated with ``realizations`` from root ``seed``, resumable as
     ``softcell simulate`` is. Every point is planned (every bad value, before any run)
-    before ``out`` is marked as the study ``command``'s; one local cluster serves them all."""
-    from contextlib import nullcontext
+    before ``out`` is marked as the study ``command``'s; one local cluster serves them all
+    (:func:`softcell.runner.points.run_points`)."""
+    from softcell.runner.points import run_points as run
 
-    from softcell.components.registry import default_registry
-    from softcell.paper.reproduce import worker_count
-    from softcell.runner.cluster import cluster_client
-    from softcell.runner.ensemble import plan, simulate
-
-    registry = default_registry()
-    for folder, (_, config) in points.items():
-        plan(config, folder, realizations=realizations, seed=seed, registry=registry)
-    mark_study(out, command, seed, overwrite)
-    say = log or (lambda _: None)
-    workers = worker_count(workers, None)
-    with cluster_client(workers) if workers > 1 else nullcontext() as client:
-        for i, (folder, (label, config)) in enumerate(points.items()):
-            say(f"point {i + 1}/{len(points)}: {label}")
-            simulate(
-                config,
-                folder,
-                realizations=realizations,
-                seed=seed,
-                client=client,
-                progress=progress,
-                overwrite=overwrite,
-                log=log,
-            )
+    run(
+        points,
+        realizations=realizations,
+        seed=seed,
+        workers=workers,
+        overwrite=overwrite,
+        progress=progress,
+        log=log,
+        planned=lambda: mark_study(out, command, seed, overwrite),
+    )
 
 
 def realization_means(
