@@ -13,6 +13,7 @@ from scipy import integrate
 
 from softcell.components.registry import default_registry
 from softcell.errors import ConfigError
+from softcell.fit.design import design_points, run_design, space_filling, statistics_of
 from softcell.fit.priors import Prior, make_prior, parse_prior, priors_from_table
 from softcell.fit.statistics import observed
 from softcell.model.configuration import DEFAULT_COMPONENTS
@@ -140,3 +141,69 @@ def test_a_statistic_the_data_lacks_or_an_unknown_one_is_refused(analysis):
         observed(undefined, ("ipr_mean",))
     with pytest.raises(ConfigError, match="at least one statistic"):
         observed(analysis, ())
+
+
+# -- the design ---------------------------------------------------------------------------
+
+
+def _two_priors(specs):
+    return [
+        parse_prior("bending_stiffness=0.01:1", specs),
+        parse_prior("membrane_friction=1e-5:1e-4", specs),
+    ]
+
+
+def test_the_design_fills_the_box_the_same_way_from_the_same_seed(specs):
+    priors = _two_priors(specs)
+    values = space_filling(priors, 16, seed=4)
+    assert values.shape == (16, 2)
+    assert np.array_equal(values, space_filling(priors, 16, seed=4))
+    assert not np.array_equal(values, space_filling(priors, 16, seed=5))
+    for i, prior in enumerate(priors):
+        q = prior.quantile(values[:, i])
+        assert np.all((q >= 0) & (q < 1))
+        # a scrambled Sobol net: each 1/16 of every prior holds exactly one point
+        assert sorted(np.floor(q * 16).astype(int)) == list(range(16))
+
+
+@pytest.mark.parametrize("count", [0, 1, 12, 2.0, True])
+def test_a_design_size_that_is_not_a_power_of_two_is_refused(specs, count):
+    with pytest.raises(ConfigError, match="must be a power of two >= 2"):
+        space_filling(_two_priors(specs), count, seed=0)
+    with pytest.raises(ConfigError, match="at least one unknown"):
+        space_filling([], 8, seed=0)
+
+
+def test_the_design_points_set_the_unknowns_over_the_base(tmp_path, specs):
+    from softcell.model.configuration import RunConfig
+
+    base = RunConfig(parameters={"radius": 6.0, "duration": 3.0})
+    priors = _two_priors(specs)
+    points = design_points(tmp_path, base, priors, np.array([[0.1, 2e-5], [0.5, 8e-5]]))
+    assert list(points) == [tmp_path / "point0000", tmp_path / "point0001"]
+    label, config = points[tmp_path / "point0001"]
+    assert config.parameters == {"radius": 6.0, "duration": 3.0,
+                                 "bending_stiffness": 0.5, "membrane_friction": 8e-5}  # fmt: skip
+    assert label == "bending_stiffness = 0.5 N cm2, membrane_friction = 8e-05 N s cm-2"
+
+
+def test_every_design_point_draws_the_same_random_numbers(tmp_path, specs):
+    from softcell.io.netcdf import open_dataset
+    from softcell.model.configuration import RunConfig
+
+    base = RunConfig(parameters={"radius": 5.0, "duration": 4.0})
+    priors = _two_priors(specs)
+    values = np.array([[0.05, 2e-5], [0.8, 9e-5]])
+    folders = run_design(
+        tmp_path, base, priors, values, realizations=2, seed=3, workers=1, progress=False
+    )
+    runs = [open_dataset(f) for f in folders]
+    # common random numbers: realization r of each point has the same drive schedule ...
+    assert np.array_equal(runs[0]["bot_phase"].values, runs[1]["bot_phase"].values)
+    # ... and the two realizations of a point differ
+    assert not np.array_equal(*runs[0]["bot_phase"].values)
+    # the points differ by their parameters: the softer membrane deforms more
+    assert float(runs[0].attrs["parameter_bending_stiffness"]) == 0.05
+    each = statistics_of(folders, ("mean_speed", "ipr_mean"), {"discard": 0.0})
+    assert each.shape == (2, 2, 2) and np.all(np.isfinite(each))
+    assert np.all(each[0, :, 1] > each[1, :, 1])
