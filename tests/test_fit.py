@@ -12,8 +12,9 @@ from hypothesis import strategies as st
 from scipy import integrate
 
 from softcell.components.registry import default_registry
-from softcell.errors import ConfigError
+from softcell.errors import ConfigError, SoftcellError
 from softcell.fit.design import design_points, run_design, space_filling, statistics_of
+from softcell.fit.inference import fit_emulator, sample_posterior
 from softcell.fit.priors import Prior, make_prior, parse_prior, priors_from_table
 from softcell.fit.statistics import observed
 from softcell.model.configuration import DEFAULT_COMPONENTS
@@ -207,3 +208,93 @@ def test_every_design_point_draws_the_same_random_numbers(tmp_path, specs):
     each = statistics_of(folders, ("mean_speed", "ipr_mean"), {"discard": 0.0})
     assert each.shape == (2, 2, 2) and np.all(np.isfinite(each))
     assert np.all(each[0, :, 1] > each[1, :, 1])
+
+
+# -- the posterior ------------------------------------------------------------------------
+# A linear Gaussian model whose posterior is known: two statistics x = a + b theta + noise
+# (sd s, independent), theta uniform on [0, 1]. With n realizations of data and a flat prior
+# the posterior is normal, of precision n sum(b^2 / s^2), centred where the data's means say.
+
+A, B, S = np.array([5.0, 3.0]), np.array([2.0, -1.0]), np.array([0.3, 0.2])
+
+
+def _linear(theta: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    noise = rng.standard_normal((*np.shape(theta), n, 2))
+    return A + B * np.asarray(theta)[..., None, None] + S * noise
+
+
+def _emulator(points: int, realizations: int):
+    from scipy.stats import qmc
+
+    prior = Prior("theta", 0.0, 1.0, "1", "linear")
+    design = qmc.Sobol(1, seed=1).random_base2(points.bit_length() - 1)[:, 0]
+    each = _linear(design, realizations, np.random.default_rng(0))
+    return fit_emulator([prior], design[:, None], each, seed=0)
+
+
+@pytest.fixture(scope="module")
+def linear_emulator():
+    """A design as a fit runs it: 32 points of 6 realizations (the emulator's own error is
+    part of the posterior)."""
+    return _emulator(32, 6)
+
+
+@pytest.fixture(scope="module")
+def precise_emulator():
+    """A design so dense that the emulator's error is negligible: the posterior is then the
+    analytic one."""
+    return _emulator(64, 40)
+
+
+def _analytic(data: np.ndarray) -> tuple[float, float]:
+    n = data.shape[0]
+    precision = n * np.sum(B**2 / S**2)
+    return float(np.sum(n * B * (data.mean(0) - A) / S**2) / precision), precision**-0.5
+
+
+@pytest.mark.parametrize("truth,seed", [(0.3, 11), (0.55, 12), (0.8, 13)])
+def test_the_posterior_of_a_linear_gaussian_model_is_the_analytic_one(
+    precise_emulator, truth, seed
+):
+    data = _linear(truth, 6, np.random.default_rng(seed))
+    draws = sample_posterior(precise_emulator, data, seed=seed, steps=600, burn=200)[:, 0]
+    mean, sd = _analytic(data)
+    assert abs(draws.mean() - mean) < 0.25 * sd
+    assert draws.std() == pytest.approx(sd, rel=0.12)
+
+
+def test_the_same_seed_draws_the_same_posterior(linear_emulator):
+    data = _linear(0.5, 6, np.random.default_rng(3))
+    one = sample_posterior(linear_emulator, data, seed=5, steps=100, burn=20)
+    assert np.array_equal(one, sample_posterior(linear_emulator, data, seed=5, steps=100, burn=20))
+    assert not np.array_equal(
+        one, sample_posterior(linear_emulator, data, seed=6, steps=100, burn=20)
+    )
+
+
+@pytest.mark.slow
+def test_the_90_percent_intervals_cover_the_truth_at_the_binomial_rate(linear_emulator):
+    from scipy.stats import binom
+
+    rng = np.random.default_rng(2026)
+    trials, hits = 100, 0
+    for trial in range(trials):
+        truth = rng.uniform(0.15, 0.85)  # inside the prior, away from its edges
+        draws = sample_posterior(
+            linear_emulator, _linear(truth, 6, rng), seed=trial, steps=400, burn=100
+        )[:, 0]
+        low, high = np.quantile(draws, [0.05, 0.95])
+        hits += bool(low <= truth <= high)
+    band = binom.ppf([0.005, 0.995], trials, 0.9)
+    assert band[0] <= hits <= band[1], f"{hits} of {trials} intervals hold the truth"
+
+
+def test_an_emulator_needs_the_noise_of_every_point():
+    prior = Prior("theta", 0.0, 1.0, "1", "linear")
+    each = _linear(np.array([0.2, 0.7]), 1, np.random.default_rng(0))
+    with pytest.raises(SoftcellError, match="two or more realizations per design point"):
+        fit_emulator([prior], np.array([[0.2], [0.7]]), each, seed=0)
+    each = _linear(np.array([0.2, 0.7]), 3, np.random.default_rng(0))
+    each[1, 1:, 0] = np.nan
+    with pytest.raises(SoftcellError, match="fewer than two realizations at design point 1"):
+        fit_emulator([prior], np.array([[0.2], [0.7]]), each, seed=0)
