@@ -206,8 +206,8 @@ def test_every_design_point_draws_the_same_random_numbers(tmp_path, specs):
     # the points differ by their parameters: the softer membrane deforms more
     assert float(runs[0].attrs["parameter_bending_stiffness"]) == 0.05
     each = statistics_of(folders, ("mean_speed", "ipr_mean"), {"discard": 0.0})
-    assert each.shape == (2, 2, 2) and np.all(np.isfinite(each))
-    assert np.all(each[0, :, 1] > each[1, :, 1])
+    assert each.shape == (2, 1, 2, 2) and np.all(np.isfinite(each))
+    assert np.all(each[0, 0, :, 1] > each[1, 0, :, 1])
 
 
 # -- the posterior ------------------------------------------------------------------------
@@ -298,3 +298,55 @@ def test_an_emulator_needs_the_noise_of_every_point():
     each[1, 1:, 0] = np.nan
     with pytest.raises(SoftcellError, match="fewer than two realizations at design point 1"):
         fit_emulator([prior], np.array([[0.2], [0.7]]), each, seed=0)
+
+
+# -- softcell fit -------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    """Simulated data of a known stiffness: 3 realizations of 12 s at R = 5 cm, seed 1."""
+    from softcell.cli import main
+
+    out = tmp_path_factory.mktemp("fit") / "data"
+    argv = ["simulate", "--radius", "5", "--bending-stiffness", "0.2", "--duration", "12"]
+    assert main([*argv, "--realizations", "3", "--seed", "1", "-o", str(out), "--quiet"]) == 0
+    return out
+
+
+@pytest.mark.parametrize(
+    "argv,words",
+    [
+        (["--prior", "bending_stiffnes=0.1:1"], "did you mean 'bending_stiffness'"),
+        (["--prior", "bending_stiffness=0.1:1", "--simulations", "12"], "power of two"),
+        (["--prior", "bending_stiffness=0.1:1", "--seed", "1"], "simulated from seed 1"),
+        (["--prior", "bending_stiffness=0.1:1 N"], "unit 'N' is not convertible"),
+        (["--prior", "bending_stiffness=1:0.1"], "is empty"),
+        (["--prior", "bending_stiffness=0.1:1", "--statistics", "ipr_man"], "'ipr_mean'"),
+    ],
+)
+def test_a_bad_fit_is_one_line_before_any_simulation(data, tmp_path, capsys, argv, words):
+    from softcell.cli import main
+
+    code = main(["fit", str(data), *argv, "-o", str(tmp_path / "fit.nc")])
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.slow
+def test_a_fit_of_simulated_data_holds_its_true_stiffness(data, tmp_path):
+    import xarray as xr
+
+    from softcell.cli import main
+
+    out = tmp_path / "fit.nc"
+    argv = ["fit", str(data), "--prior", "bending_stiffness=0.05:1", "--simulations", "16"]
+    argv += ["--statistics", "ipr_mean,mean_speed", "--discard", "2", "-o", str(out)]
+    assert main([*argv, "--quiet", "--workers", "2"]) == 0
+    result = xr.open_dataset(out)
+    low, _, high = result["bending_stiffness_interval"].values
+    assert low <= 0.2 <= high and high / low < 10  # the truth, and narrower than the prior
+    assert result["bending_stiffness"].attrs["units"] == "N cm2"
+    assert result.sizes["design_point"] == 16 and result.attrs["softcell_seed"] == 2
+    assert len(list((tmp_path / "fit_design").glob("point*/*.nc"))) == 16 * 3

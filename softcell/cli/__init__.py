@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Callable, Sequence
 
 from softcell._version import __version__
-from softcell.cli import analyze, paper, run, studies, video
+from softcell.cli import analyze, fit, paper, run, studies, video
 from softcell.cli.flags import Help, Parser
 from softcell.engine.interrupt import exit_status, received, stop_signals
 from softcell.errors import CacheWarning, PluginWarning, SoftcellError
@@ -27,7 +27,14 @@ from softcell.errors import CacheWarning, PluginWarning, SoftcellError
 #: A verb's flags are built only when it runs, so ``softcell --version`` and ``--help`` import
 #: nothing heavy.
 COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None]]] = {
-    name: {**run.VERBS, **analyze.VERBS, **video.VERBS, **paper.VERBS, **studies.VERBS}[name]
+    name: {
+        **run.VERBS,
+        **analyze.VERBS,
+        **video.VERBS,
+        **paper.VERBS,
+        **studies.VERBS,
+        **fit.VERBS,
+    }[name]
     for name in (
         "plugins",
         "params",
@@ -41,6 +48,7 @@ COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None]]] = {
         "reproduce",
         "beyond",
         "study",
+        "fit",
         "calibrate",
         "cache",
     )

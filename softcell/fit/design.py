@@ -111,7 +111,8 @@ def run_design(
 
 def statistics_of(folders: Sequence[Path], statistics: Sequence[str], options: dict[str, Any]):
     """The statistics of each design point's simulations (analysed with ``options``, e.g.
-    ``{"discard": 15}``): float64[point, realization, statistic]."""
+    ``{"discard": 15}``): float64[design point, point of the data (radius), realization,
+    statistic]."""
     from softcell.analysis import analyze
     from softcell.fit.statistics import observed
     from softcell.io.netcdf import open_dataset
@@ -119,5 +120,5 @@ def statistics_of(folders: Sequence[Path], statistics: Sequence[str], options: d
     each = []
     for folder in folders:
         analysis = analyze(open_dataset(folder), options)
-        each.append(observed(analysis, statistics).each[0])
+        each.append(observed(analysis, statistics).each)
     return np.stack(each)

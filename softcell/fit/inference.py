@@ -128,7 +128,7 @@ def fit_emulator(
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(EMULATOR_KEY,)))
     processes = []
     for k in range(z.shape[2]):
-        kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(
+        kernel = ConstantKernel(1.0, (1e-6, 1e4)) * RBF(
             np.full(len(priors), 0.5), length_scale_bounds=(1e-2, 1e2)
         )
         process = GaussianProcessRegressor(

@@ -31,7 +31,9 @@ from softcell.errors import SoftcellError
 from softcell.model.limits import human_bytes
 
 #: The kinds of output, and how an existing file of that kind is recognised.
-KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report", "export")
+KINDS = ("simulation", "tracking", "analysis", "video", "figure", "report", "export", "fit")
+#: The kinds of output that are NetCDF files, marked by their ``softcell_origin``.
+NETCDF_KINDS = ("simulation", "tracking", "analysis", "export", "fit")
 
 #: Below this many free bytes a failed write is taken to be a full disk.
 FULL_DISK_BYTES = 1 << 20
@@ -211,7 +213,7 @@ def kind_of(path: str | os.PathLike[str]) -> str | None:
 
             with netCDF4.Dataset(path) as nc:
                 origin = getattr(nc, "softcell_origin", None)
-            return origin if origin in ("simulation", "tracking", "analysis", "export") else None
+            return origin if origin in NETCDF_KINDS else None
         if suffix in (".png", ".pdf", ".svg"):
             size = path.stat().st_size
             with open(path, "rb") as fh:

@@ -1,0 +1,209 @@
+"""A fit, end to end: from data files and priors to a file of posterior samples.
+
+The data are simulation files (a folder of realizations, possibly over several radii, or one
+file): their request (parameters and components) is the design every simulation of the fit
+repeats, with the unknowns set by the space-filling design; their realizations are
+analysed as the design's are, and the statistics of both meet in the emulator's synthetic
+likelihood (:mod:`softcell.fit.inference`). The design's simulations are files under
+``<fit>_design/``: an interrupted fit resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softcell.errors import ConfigError
+from softcell.fit.priors import Prior, parse_prior
+from softcell.fit.statistics import DEFAULT_STATISTICS, check_statistics, observed
+from softcell.model.configuration import RunConfig
+
+#: The posterior quantiles a fit stores for every unknown: the median and the 90 % interval.
+QUANTILES = (0.05, 0.5, 0.95)
+
+
+def data_request(ds) -> tuple[RunConfig, int]:
+    """The request (parameters, swept ones as lists, and components) of simulation data, and
+    the root seed it was simulated from.
+
+    Raises
+    ------
+    ConfigError
+        For data that are no simulation of one cell (tracked films need their design given:
+        not yet), or an assembly.
+    """
+    if ds.attrs.get("softcell_origin") != "simulation":
+        raise ConfigError(
+            "a fit reads simulation files (softcell simulate); this data is "
+            f"{ds.attrs.get('softcell_origin', 'not a softcell file')!r}"
+        )
+    components = json.loads(ds.attrs["softcell_components"])
+    if "cell" in ds.dims or components.get("assembly"):
+        raise ConfigError("a fit of an assembly of cells is not supported: fit one cell's data")
+    if not components.pop("membrane", True):
+        raise ConfigError("a fit needs a cell: the data is a free bot's")
+    parameters = json.loads(ds.attrs["softcell_parameters"])
+    return RunConfig(parameters=parameters, components=components), int(ds.attrs["softcell_seed"])
+
+
+def fit(
+    data: str | Path,
+    priors: Sequence[str | Prior],
+    out: str | Path,
+    *,
+    statistics: Sequence[str] | None = None,
+    simulations: int = 32,
+    seed: int | None = None,
+    discard: float | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress: bool = True,
+    log: Callable[[str], None] | None = print,
+) -> Path:
+    """Fit the unknowns to simulation data, and write their posterior.
+
+    Parameters
+    ----------
+    data : path-like
+        Simulation files (a folder of ``softcell simulate``, or one file).
+    priors : sequence of str or Prior
+        The unknowns: ``NAME=LOW:HIGH [UNIT]`` (see :func:`~softcell.fit.priors.parse_prior`).
+    out : path-like
+        The fit's file (NetCDF); the design's simulations go to ``<out>_design/``.
+    statistics : sequence of str, optional
+        What data and simulations are compared by (analysis variables with a value per
+        realization; default :data:`~softcell.fit.statistics.DEFAULT_STATISTICS`).
+    simulations : int
+        Design points (a power of two); each runs as many realizations as the data has.
+    seed : int, optional
+        The fit's root seed: the design, its simulations, the emulator and the sampler draw
+        from it. It must differ from the data's own seed (default: the data's seed + 1).
+    discard : float, optional
+        Seconds dropped at the start of every realization by the analysis (default: the
+        analysis's).
+    workers, scheduler
+        Local worker processes, or a dask scheduler's address.
+    overwrite : bool
+        Replace an existing fit file, and recompute design simulations of another request.
+    progress : bool
+        A progress bar per design point.
+    log : callable, optional
+        Receives a line per stage.
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Raises
+    ------
+    ConfigError
+        Before any simulation: for a bad prior, statistic, design size or seed, or data a fit
+        cannot read.
+    """
+    from softcell.analysis import analyze
+    from softcell.components.registry import default_registry
+    from softcell.fit.design import run_design, space_filling, statistics_of
+    from softcell.fit.inference import fit_emulator, sample_posterior
+    from softcell.io.files import check_output
+    from softcell.io.netcdf import open_dataset
+    from softcell.model.parameters import MODEL_PARAMETERS
+
+    say = log or (lambda _: None)
+    out = check_output(Path(out), "fit", inputs=[data], overwrite=overwrite)
+    ds = open_dataset(data)
+    base, data_seed = data_request(ds)
+    seed = data_seed + 1 if seed is None else seed
+    if seed == data_seed:
+        raise ConfigError(
+            f"the data was simulated from seed {data_seed}: the fit's simulations must draw "
+            "other random numbers; pass another --seed"
+        )
+    specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
+    priors = [p if isinstance(p, Prior) else parse_prior(p, specs) for p in priors]
+    statistics = check_statistics(DEFAULT_STATISTICS if statistics is None else statistics)
+    values = space_filling(priors, simulations, seed)
+    options = {} if discard is None else {"discard": float(discard)}
+    seen = observed(analyze(ds, options), statistics)
+    realizations = seen.each.shape[1]
+    say(f"design: {simulations} points x {realizations} realizations ({seen.each.shape[0]} "
+        f"point(s) of the data each)")  # fmt: skip
+    folders = run_design(
+        out.parent / f"{out.stem}_design", base, priors, values,
+        realizations=realizations, seed=seed, workers=workers, scheduler=scheduler,
+        progress=progress, log=log,
+    )  # fmt: skip
+    say("analysing the design")
+    each = statistics_of(folders, statistics, options)
+    say("emulating the statistics and sampling the posterior")
+    emulator = fit_emulator(priors, values, _flat(each), seed=seed)
+    draws = sample_posterior(emulator, _flat(seen.each[None])[0], seed=seed)
+    result = _dataset(priors, draws, values, each, seen, statistics, base, seed, Path(data))
+    _write(result, out)
+    for p, (low, mid, high) in zip(priors, _intervals(draws), strict=True):
+        say(f"{p.name} = {mid:.4g} {p.unit} (90 % interval {low:.4g} .. {high:.4g})")
+    return out
+
+
+def _flat(each: np.ndarray) -> np.ndarray:
+    """float64[j, point, realization, statistic] -> float64[j, realization, point x
+    statistic]: the points of one realization side by side."""
+    return np.moveaxis(each, 2, 1).reshape(each.shape[0], each.shape[2], -1)
+
+
+def _intervals(draws: np.ndarray) -> np.ndarray:
+    """float64[unknown, 3]: the 5 %, 50 % and 95 % quantiles of each unknown's draws."""
+    return np.quantile(draws, QUANTILES, axis=0).T
+
+
+def _dataset(priors, draws, values, each, seen, statistics, base, seed, data: Path):
+    """The fit as an xarray Dataset with CF attributes."""
+    import xarray as xr
+
+    from softcell._version import __version__
+
+    out = xr.Dataset()
+    for i, p in enumerate(priors):
+        out[p.name] = ("sample", draws[:, i], {
+            "units": p.unit, "long_name": f"posterior sample of {p.name}"})  # fmt: skip
+        out[f"{p.name}_interval"] = ("quantile", _intervals(draws)[i], {
+            "units": p.unit, "long_name": f"posterior quantiles of {p.name}"})  # fmt: skip
+        out[f"design_{p.name}"] = ("design_point", values[:, i], {
+            "units": p.unit, "long_name": f"{p.name} at each design point"})  # fmt: skip
+    out["quantile"] = ("quantile", np.array(QUANTILES), {
+        "units": "1", "long_name": "posterior probability below"})  # fmt: skip
+    out["design_statistics"] = (("design_point", "point", "realization", "statistic"), each, {
+        "units": "1", "long_name": "each design point's statistics per realization "
+        "(units: statistic_units)"})  # fmt: skip
+    out["data_statistics"] = (("point", "realization", "statistic"), seen.each, {
+        "units": "1", "long_name": "the data's statistics per realization "
+        "(units: statistic_units)"})  # fmt: skip
+    out["statistic"] = ("statistic", np.array(statistics, dtype=object), {
+        "long_name": "statistic compared (an analysis variable)"})  # fmt: skip
+    out.attrs.update({
+        "Conventions": "CF-1.8",
+        "title": "softcell fit: posterior samples of the unknowns",
+        "softcell_version": __version__,
+        "softcell_origin": "fit",
+        "softcell_seed": seed,
+        "softcell_data": str(data),
+        "softcell_priors": json.dumps([p.__dict__ for p in priors]),
+        "statistic_units": json.dumps(dict(zip(statistics, seen.units, strict=True))),
+        "softcell_parameters": json.dumps(base.parameters),
+        "softcell_components": json.dumps(base.components),
+        "method": "Gaussian-process emulator of the statistics over a scrambled Sobol design, "
+        "Gaussian synthetic likelihood, emcee's ensemble sampler",
+    })  # fmt: skip
+    return out
+
+
+def _write(result: Any, out: Path) -> None:
+    from softcell.io.files import atomic_write
+
+    with atomic_write(out) as tmp:
+        result.to_netcdf(tmp)
