@@ -223,13 +223,19 @@ def _linear(theta: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     return A + B * np.asarray(theta)[..., None, None] + S * noise
 
 
-def _emulator(points: int, realizations: int):
+def _emulator(points: int, realizations: int, common: bool = False):
+    """The emulator of a design of the linear model; ``common``: every point draws the same
+    noise (common random numbers, as a fit's design does)."""
     from scipy.stats import qmc
 
     prior = Prior("theta", 0.0, 1.0, "1", "linear")
     design = qmc.Sobol(1, seed=1).random_base2(points.bit_length() - 1)[:, 0]
-    each = _linear(design, realizations, np.random.default_rng(0))
-    return fit_emulator([prior], design[:, None], each, seed=0)
+    rng = np.random.default_rng(0)
+    if common:
+        each = A + B * design[:, None, None] + S * rng.standard_normal((realizations, 2))
+    else:
+        each = _linear(design, realizations, rng)
+    return fit_emulator([prior], design[:, None], each, seed=0, common=common)
 
 
 @pytest.fixture(scope="module")
@@ -247,9 +253,14 @@ def precise_emulator():
 
 
 def _analytic(data: np.ndarray) -> tuple[float, float]:
+    """The posterior's mean and standard deviation: a normal truncated to the prior [0, 1]."""
+    from scipy.stats import truncnorm
+
     n = data.shape[0]
     precision = n * np.sum(B**2 / S**2)
-    return float(np.sum(n * B * (data.mean(0) - A) / S**2) / precision), precision**-0.5
+    centre, sd = float(np.sum(n * B * (data.mean(0) - A) / S**2) / precision), precision**-0.5
+    posterior = truncnorm((0 - centre) / sd, (1 - centre) / sd, loc=centre, scale=sd)
+    return float(posterior.mean()), float(posterior.std())
 
 
 @pytest.mark.parametrize("truth,seed", [(0.3, 11), (0.55, 12), (0.8, 13)])
@@ -273,9 +284,14 @@ def test_the_same_seed_draws_the_same_posterior(linear_emulator):
 
 
 @pytest.mark.slow
-def test_the_90_percent_intervals_cover_the_truth_at_the_binomial_rate(linear_emulator):
+@pytest.mark.parametrize("common", [False, True], ids=["independent", "common random numbers"])
+def test_the_90_percent_intervals_cover_the_truth_at_the_binomial_rate(common):
+    """Over data sets drawn at random truths, the 90 % intervals hold the truth at the
+    binomial rate, whether the design's points draw independent noise or share it (then
+    the emulator carries the shared error, which no number of points averages away)."""
     from scipy.stats import binom
 
+    linear_emulator = _emulator(32, 6, common)
     rng = np.random.default_rng(2026)
     trials, hits = 100, 0
     for trial in range(trials):
@@ -342,7 +358,8 @@ def test_a_fit_of_simulated_data_holds_its_true_stiffness(data, tmp_path):
 
     out = tmp_path / "fit.nc"
     argv = ["fit", str(data), "--prior", "bending_stiffness=0.05:1", "--simulations", "16"]
-    argv += ["--statistics", "ipr_mean,mean_speed", "--discard", "2", "-o", str(out)]
+    argv += ["--statistics", "ipr_mean,mean_speed", "--discard", "2", "--check-draws", "4"]
+    argv += ["-o", str(out)]
     assert main([*argv, "--quiet", "--workers", "2"]) == 0
     result = xr.open_dataset(out)
     low, _, high = result["bending_stiffness_interval"].values
@@ -350,3 +367,24 @@ def test_a_fit_of_simulated_data_holds_its_true_stiffness(data, tmp_path):
     assert result["bending_stiffness"].attrs["units"] == "N cm2"
     assert result.sizes["design_point"] == 16 and result.attrs["softcell_seed"] == 2
     assert len(list((tmp_path / "fit_design").glob("point*/*.nc"))) == 16 * 3
+    assert len(list((tmp_path / "fit_check").glob("point*/*.nc"))) == 4 * 3
+    assert result["check_verdict"].dims == ("point", "statistic")
+    assert result["check_z"].shape == (1, 2)
+    from softcell.io.files import kind_of
+
+    assert kind_of(out.with_suffix(".png")) == "figure"
+
+
+def test_the_check_judges_a_statistic_by_its_predictive_spread():
+    from softcell.fit.check import judge
+
+    rng = np.random.default_rng(4)
+    draws = 1.0 + 0.1 * rng.standard_normal((16, 1, 6, 2))  # 16 draws, 6 realizations each
+    data = 1.0 + 0.1 * rng.standard_normal((1, 6, 2))
+    data[..., 1] += 0.5  # the second statistic far from what the draws give
+    z, verdict = judge(data, draws)
+    assert abs(z[0, 0]) < 2 and verdict.tolist() == [[0, 1]]
+    # the spread of a mean of 6: 0.1 / sqrt(6), not the draws' means' spread alone
+    assert z[0, 1] == pytest.approx(
+        (data[0, :, 1].mean() - draws[..., 1].mean(axis=2).mean()) / (0.1 / np.sqrt(6)), rel=0.3
+    )

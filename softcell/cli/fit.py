@@ -42,6 +42,13 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--discard", type=float, metavar="SECONDS", help="seconds the analysis drops first"
     )
+    p.add_argument(
+        "--check-draws",
+        type=int,
+        default=16,
+        metavar="K",
+        help="posterior draws re-simulated for the predictive check (default 16; 0: none)",
+    )
     flags.output(p, "the fit's file (.nc); its simulations go to <name>_design/")
     flags.overwrite(p, "replace an existing file that is not a softcell fit")
     flags.seed(
@@ -63,6 +70,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         simulations=args.simulations,
         seed=args.seed,
         discard=args.discard,
+        check_draws=args.check_draws,
         workers=args.workers,
         scheduler=args.scheduler,
         overwrite=args.overwrite,

@@ -82,11 +82,13 @@ def run_design(
     seed: int,
     workers: int | None = None,
     scheduler: str | None = None,
+    overwrite: bool = False,
     progress: bool = True,
     log: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """Simulate every design point (:func:`design_points`) with ``realizations`` from root
-    ``seed``; every point is planned before any runs. Returns the points' folders, in order.
+    ``seed``; every point is planned before any runs (``overwrite``: recompute a folder made
+    from another request). Returns the points' folders, in order.
 
     Raises
     ------
@@ -103,6 +105,7 @@ def run_design(
         seed=seed,
         workers=workers,
         scheduler=scheduler,
+        overwrite=overwrite,
         progress=progress,
         log=log,
     )

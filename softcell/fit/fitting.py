@@ -59,6 +59,7 @@ def fit(
     simulations: int = 32,
     seed: int | None = None,
     discard: float | None = None,
+    check_draws: int = 16,
     workers: int | None = None,
     scheduler: str | None = None,
     overwrite: bool = False,
@@ -86,6 +87,9 @@ def fit(
     discard : float, optional
         Seconds dropped at the start of every realization by the analysis (default: the
         analysis's).
+    check_draws : int
+        Posterior draws re-simulated for the predictive check (0: no check); their runs go
+        to ``<out>_check/``.
     workers, scheduler
         Local worker processes, or a dask scheduler's address.
     overwrite : bool
@@ -98,7 +102,7 @@ def fit(
     Returns
     -------
     Path
-        ``out``.
+        ``out``; the posterior's corner plot is ``out`` with the suffix ``.png``.
 
     Raises
     ------
@@ -108,6 +112,7 @@ def fit(
     """
     from softcell.analysis import analyze
     from softcell.components.registry import default_registry
+    from softcell.fit.check import corner_figure, predictive_check
     from softcell.fit.design import run_design, space_filling, statistics_of
     from softcell.fit.inference import fit_emulator, sample_posterior
     from softcell.io.files import check_output
@@ -116,6 +121,8 @@ def fit(
 
     say = log or (lambda _: None)
     out = check_output(Path(out), "fit", inputs=[data], overwrite=overwrite)
+    figure = check_output(out.with_suffix(".png"), "figure", overwrite=overwrite)
+    _check_draws(check_draws)
     ds = open_dataset(data)
     base, data_seed = data_request(ds)
     seed = data_seed + 1 if seed is None else seed
@@ -136,7 +143,7 @@ def fit(
     folders = run_design(
         out.parent / f"{out.stem}_design", base, priors, values,
         realizations=realizations, seed=seed, workers=workers, scheduler=scheduler,
-        progress=progress, log=log,
+        overwrite=overwrite, progress=progress, log=log,
     )  # fmt: skip
     say("analysing the design")
     each = statistics_of(folders, statistics, options)
@@ -144,10 +151,36 @@ def fit(
     emulator = fit_emulator(priors, values, _flat(each), seed=seed)
     draws = sample_posterior(emulator, _flat(seen.each[None])[0], seed=seed)
     result = _dataset(priors, draws, values, each, seen, statistics, base, seed, Path(data))
+    corner_figure(figure, priors, draws)
+    if check_draws:
+        say(f"predictive check: {check_draws} posterior draws re-simulated")
+        check = predictive_check(
+            out.parent / f"{out.stem}_check", base, priors, draws, seen.each, statistics,
+            draws=check_draws, seed=seed, options=options, workers=workers,
+            scheduler=scheduler, overwrite=overwrite, progress=progress, log=log,
+        )  # fmt: skip
+        result = result.merge(_check_dataset(priors, check))
+        _report(say, statistics, check)
     _write(result, out)
     for p, (low, mid, high) in zip(priors, _intervals(draws), strict=True):
         say(f"{p.name} = {mid:.4g} {p.unit} (90 % interval {low:.4g} .. {high:.4g})")
     return out
+
+
+def _check_draws(value: object) -> None:
+    """Refuse a number of check draws that is not 0 or an integer >= 2."""
+    if isinstance(value, bool) or not isinstance(value, int) or value == 1 or value < 0:
+        raise ConfigError(f"check_draws = {value!r} is not allowed: must be 0 or >= 2")
+
+
+def _report(say: Callable[[str], None], statistics: Sequence[str], check: dict) -> None:
+    """A line per statistic and point of the data: its z and verdict."""
+    from softcell.fit.check import VERDICTS
+
+    for k, name in enumerate(statistics):
+        for point, z in enumerate(check["z"][:, k]):
+            say(f"check {name} (point {point}): z = {z:+.2f}, "
+                f"{VERDICTS[check['verdict'][point, k]]}")  # fmt: skip
 
 
 def _flat(each: np.ndarray) -> np.ndarray:
@@ -199,6 +232,30 @@ def _dataset(priors, draws, values, each, seen, statistics, base, seed, data: Pa
         "method": "Gaussian-process emulator of the statistics over a scrambled Sobol design, "
         "Gaussian synthetic likelihood, emcee's ensemble sampler",
     })  # fmt: skip
+    return out
+
+
+def _check_dataset(priors, check: dict[str, np.ndarray]):
+    """The predictive check as variables of the fit's Dataset."""
+    import xarray as xr
+
+    from softcell.fit.check import LIMIT, VERDICTS
+
+    out = xr.Dataset()
+    for i, p in enumerate(priors):
+        long_name = f"{p.name} of each re-simulated posterior draw"
+        out[f"check_{p.name}"] = ("check_draw", check["values"][:, i],
+                                  {"units": p.unit, "long_name": long_name})  # fmt: skip
+    out["check_statistics"] = (("check_draw", "point", "realization", "statistic"), check["each"], {
+        "units": "1", "long_name": "each re-simulated draw's statistics per realization "
+        "(units: statistic_units)"})  # fmt: skip
+    out["check_z"] = (("point", "statistic"), check["z"], {
+        "units": "1", "long_name": "data's mean less the draws' mean, over the draws' "
+        "standard deviation"})  # fmt: skip
+    out["check_verdict"] = (("point", "statistic"), check["verdict"], {
+        "long_name": f"posterior predictive verdict: consistent when |check_z| <= {LIMIT:g}",
+        "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
+        "flag_meanings": " ".join(VERDICTS)})  # fmt: skip
     return out
 
 
