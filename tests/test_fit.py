@@ -223,14 +223,15 @@ def _linear(theta: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     return A + B * np.asarray(theta)[..., None, None] + S * noise
 
 
-def _emulator(points: int, realizations: int, common: bool = False):
+def _emulator(points: int, realizations: int, common: bool = False, noise: int = 0):
     """The emulator of a design of the linear model; ``common``: every point draws the same
-    noise (common random numbers, as a fit's design does)."""
+    noise (common random numbers, as a fit's design does); ``noise``: the seed of the
+    design's noise."""
     from scipy.stats import qmc
 
     prior = Prior("theta", 0.0, 1.0, "1", "linear")
     design = qmc.Sobol(1, seed=1).random_base2(points.bit_length() - 1)[:, 0]
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(noise)
     if common:
         each = A + B * design[:, None, None] + S * rng.standard_normal((realizations, 2))
     else:
@@ -288,17 +289,24 @@ def test_the_same_seed_draws_the_same_posterior(linear_emulator):
 def test_the_90_percent_intervals_cover_the_truth_at_the_binomial_rate(common):
     """Over data sets drawn at random truths, the 90 % intervals hold the truth at the
     binomial rate, whether the design's points draw independent noise or share it (then
-    the emulator carries the shared error, which no number of points averages away)."""
+    the emulator carries the shared error, which no number of points averages away).
+
+    With shared noise the design's one noise draw is a common offset: the coverage is the
+    promised one over designs, not for one design (one design, seed 0, held the truth in
+    82 of 100; without the shared error in the likelihood, 71), so each trial draws its
+    own design's noise."""
     from scipy.stats import binom
 
-    linear_emulator = _emulator(32, 6, common)
+    emulator = _emulator(32, 6, common)
     rng = np.random.default_rng(2026)
     trials, hits = 100, 0
     for trial in range(trials):
         truth = rng.uniform(0.15, 0.85)  # inside the prior, away from its edges
-        draws = sample_posterior(
-            linear_emulator, _linear(truth, 6, rng), seed=trial, steps=400, burn=100
-        )[:, 0]
+        if common:
+            emulator = _emulator(32, 6, common, noise=1000 + trial)
+        draws = sample_posterior(emulator, _linear(truth, 6, rng), seed=trial, steps=400, burn=100)[
+            :, 0
+        ]
         low, high = np.quantile(draws, [0.05, 0.95])
         hits += bool(low <= truth <= high)
     band = binom.ppf([0.005, 0.995], trials, 0.9)

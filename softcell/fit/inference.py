@@ -10,7 +10,8 @@ simulations are spent once, on the design, and the posterior is drawn from an em
    each point's own noise (the variance of its mean across its realizations) given as its
    nugget;
 2. the data's mean of the statistics then has the synthetic likelihood
-   N(mu(theta), C / n + C / m + diag(s^2(theta))): mu and s^2 the emulator's prediction and
+   N(mu(theta), C / n + C / m + diag(s^2(theta))) (a Student t of C's degrees of freedom,
+   since C is estimated): mu and s^2 the emulator's prediction and
    its variance, C the covariance of one realization's statistics, pooled over the design
    points (an approximation: C is taken not to vary across the prior box), n the data's
    realizations and m the design's. The term C / m is there because the design's points
@@ -66,6 +67,10 @@ class Emulator:
         float64[statistic, statistic]: the covariance of the error that every design
         point's mean shares (``covariance`` over the design's realizations under common
         random numbers; zero without).
+    dof : float
+        The degrees of freedom of ``covariance``: realizations less one, summed over the
+        points; under common random numbers, one point's (the points share their noise,
+        so the others add little to what is known of it).
     """
 
     priors: tuple[Prior, ...]
@@ -73,6 +78,7 @@ class Emulator:
     processes: tuple[Any, ...]
     covariance: np.ndarray
     shared: np.ndarray
+    dof: float
 
     def transform(self, each: np.ndarray) -> np.ndarray:
         """Statistics (last axis) as the emulator sees them: the logarithm where
@@ -134,7 +140,7 @@ def fit_emulator(
         )
     finite = np.isfinite(each)
     logged = np.all(np.where(finite, each > 0, True), axis=(0, 1))
-    placeholder = Emulator(tuple(priors), logged, (), np.empty((0, 0)), np.empty((0, 0)))
+    placeholder = Emulator(tuple(priors), logged, (), np.empty((0, 0)), np.empty((0, 0)), 0.0)
     z = placeholder.transform(each)
     counts = np.sum(np.isfinite(z), axis=1)
     if np.any(counts < 2):
@@ -160,14 +166,17 @@ def fit_emulator(
             random_state=int(rng.integers(2**31)),
         )
         processes.append(process.fit(quantiles, means[:, k]))
-    covariance = _pooled_covariance(z)
+    covariance, dof = _pooled_covariance(z)
     shared = covariance / each.shape[1] if common else np.zeros_like(covariance)
-    return Emulator(tuple(priors), logged, tuple(processes), covariance, shared)
+    if common:
+        dof = float(each.shape[1] - 1)
+    return Emulator(tuple(priors), logged, tuple(processes), covariance, shared, dof)
 
 
-def _pooled_covariance(z: np.ndarray) -> np.ndarray:
+def _pooled_covariance(z: np.ndarray) -> tuple[np.ndarray, float]:
     """The covariance of one realization's statistics, pooled over the points
-    (float64[point, realization, statistic]; realizations with a NaN left out)."""
+    (float64[point, realization, statistic]; realizations with a NaN left out), and its
+    degrees of freedom."""
     total, dof = 0.0, 0
     for point in z:
         rows = point[np.all(np.isfinite(point), axis=1)]
@@ -176,7 +185,7 @@ def _pooled_covariance(z: np.ndarray) -> np.ndarray:
             dof += rows.shape[0] - 1
     if dof == 0:
         raise SoftcellError("no design point has two realizations with every statistic defined")
-    return np.atleast_2d(total / dof)
+    return np.atleast_2d(total / dof), float(dof)
 
 
 def log_likelihood(emulator: Emulator, data: np.ndarray, quantiles: np.ndarray) -> np.ndarray:
@@ -194,7 +203,9 @@ def log_likelihood(emulator: Emulator, data: np.ndarray, quantiles: np.ndarray) 
     Returns
     -------
     numpy.ndarray
-        float64[n]: the log likelihood (natural log, up to a constant).
+        float64[n]: the log likelihood (natural log, up to a constant): a multivariate
+        Student t of the emulator's ``dof`` degrees of freedom, since its covariance is
+        estimated from the design's realizations (normal as they grow many).
     """
     z = emulator.transform(data)
     count = np.sum(np.isfinite(z), axis=0)
@@ -204,9 +215,9 @@ def log_likelihood(emulator: Emulator, data: np.ndarray, quantiles: np.ndarray) 
     cov = emulator.covariance * scale + emulator.shared + var[:, :, None] * np.eye(var.shape[1])
     chol = np.linalg.cholesky(cov)
     w = np.linalg.solve(chol, (observed - mean)[:, :, None])[:, :, 0]
-    return -0.5 * np.sum(w * w, axis=1) - np.sum(
-        np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1
-    )
+    nu, k = emulator.dof, mean.shape[1]
+    log_det = np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
+    return -0.5 * (nu + k) * np.log1p(np.sum(w * w, axis=1) / nu) - log_det
 
 
 def sample_posterior(
