@@ -22,9 +22,10 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
         "--prior",
         action="append",
         required=True,
-        metavar="NAME=LOW:HIGH[ UNIT]",
+        metavar="NAME=LOW:HIGH",
         help="an unknown and its range (repeatable), in the parameter's unit (softcell "
-        "params) or in UNIT; log-uniform when HIGH / LOW > 10, else uniform",
+        "params), or 'NAME=LOW:HIGH UNIT' in another unit; log-uniform when HIGH / LOW > 10, "
+        "else uniform",
     )
     p.add_argument(
         "--statistics",
