@@ -25,16 +25,22 @@ def test_every_study_is_found_by_its_name_and_follows_the_protocol():
 
 @pytest.fixture
 def captured(monkeypatch):
-    """Each variant study's comparison replaced by a record of what it was asked to run."""
+    """Each variant study's comparison replaced by a record of what it was asked to run:
+    (study, folder, its design's variants and base, the other options)."""
+    from types import SimpleNamespace
+
     asked = []
 
-    def compare(self, out, design, **options):
-        asked.append((self.name, out, design, options))
-        return out / f"{self.name}.md"
+    def recorder(name):
+        def comparison(out, *, variants, base, **options):
+            asked.append((name, out, SimpleNamespace(variants=variants, base=base), options))
+            return out / f"{name}.md"
+
+        return staticmethod(comparison)
 
     for study in studies().values():
         if isinstance(study, VariantStudy):
-            monkeypatch.setattr(type(study), "compare", compare)
+            monkeypatch.setattr(type(study), "comparison", recorder(study.name))
     return asked
 
 

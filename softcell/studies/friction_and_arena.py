@@ -365,11 +365,7 @@ class Beyond(VariantStudy):
     variants = VARIANTS
     base = QUICK
 
-    def compare(self, out, design, *, seed, workers, overwrite, progress, log) -> Path:
-        return beyond(
-            out, seed=seed, workers=workers, variants=design.variants, base=design.base,
-            overwrite=overwrite, progress=progress, log=log,
-        )  # fmt: skip
+    comparison = staticmethod(beyond)
 
 
 #: The study, as ``softcell study beyond`` runs it.

@@ -281,7 +281,7 @@ class VariantStudy(Study):
     Its design is a ``VariantDesign`` (``softcell.studies.variants``); it has one, the
     quick design of the paper over every variant the study knows (``variants``), and the
     command line's ``--only NAMES`` keeps some of them (:meth:`named`). A study sets
-    ``variants``, ``base`` (the paper's design every variant runs) and ``compare``, the
+    ``variants``, ``base`` (the paper's design every variant runs) and ``comparison``, the
     function that runs its variants and writes its page.
     """
 
@@ -289,6 +289,9 @@ class VariantStudy(Study):
     flags: ClassVar[tuple[str, ...]] = ("only",)
     variants: ClassVar[tuple[Any, ...]]
     base: ClassVar[Any]
+    #: Runs the variants and writes the page: ``comparison(out, *, seed, workers, variants,
+    #: base, overwrite, progress, log) -> Path`` (a ``staticmethod``).
+    comparison: ClassVar[Callable[..., Path]]
 
     @property
     def designs(self) -> dict[str, Any]:  # type: ignore[override]
@@ -355,8 +358,11 @@ class VariantStudy(Study):
         log: Callable[[str], None] | None,
     ) -> Path:
         """Run the variants of ``design`` into ``out`` and write the comparison (the options
-        as :meth:`run` takes them); the path of its page."""
-        raise NotImplementedError
+        as :meth:`run` takes them), by the study's ``comparison``; the path of its page."""
+        return self.comparison(
+            out, seed=seed, workers=workers, variants=design.variants, base=design.base,
+            overwrite=overwrite, progress=progress, log=log,
+        )  # fmt: skip
 
     def run(
         self,

@@ -565,11 +565,7 @@ class Sensitivity(VariantStudy):
     variants = VARIANTS
     base = BASE
 
-    def compare(self, out, design, *, seed, workers, overwrite, progress, log) -> Path:
-        return sensitivity(
-            out, seed=seed, workers=workers, variants=design.variants, base=design.base,
-            overwrite=overwrite, progress=progress, log=log,
-        )  # fmt: skip
+    comparison = staticmethod(sensitivity)
 
 
 #: The study, as ``softcell study sensitivity`` runs it.
