@@ -396,3 +396,106 @@ def test_the_check_judges_a_statistic_by_its_predictive_spread():
     assert z[0, 1] == pytest.approx(
         (data[0, :, 1].mean() - draws[..., 1].mean(axis=2).mean()) / (0.1 / np.sqrt(6)), rel=0.3
     )
+
+
+# -- films: the fit's simulations filmed and tracked as the data were ---------------------
+
+
+@pytest.fixture(scope="module")
+def films(data, tmp_path_factory):
+    """Two films of realizations 0 and 1 of ``data`` (2 s to 6 s), rendered to files and
+    tracked as a user would."""
+    from softcell.cli import main
+
+    folder = tmp_path_factory.mktemp("films")
+    tracked = []
+    for r in (0, 1):
+        movie, out = folder / f"cell{r}.mkv", folder / f"tracked{r}.nc"
+        argv = ["render", str(data), "-o", str(movie), "--realization", str(r), "--start", "2"]
+        argv += ["--end", "6", "--noise", "2", "--blur", "1", "--seed", str(7 + r), "--quiet"]
+        assert main(argv) == 0
+        assert main(["track", str(movie), "-o", str(out), "--px-per-cm", "10", "--radius", "5",
+                     "--quiet"]) == 0  # fmt: skip
+        tracked.append(out)
+    return folder, tracked
+
+
+def test_a_film_made_in_memory_is_the_rendered_film_tracked(data, films):
+    """filmed() against the independent path: render writes the film, track reads it back."""
+    import json
+
+    from softcell.io.netcdf import open_dataset
+    from softcell.video.film import Camera, filmed
+    from softcell.video.render import Film
+
+    folder, tracked = films
+    from_file = open_dataset(tracked[1])
+    made = filmed(open_dataset(data), camera=Camera(noise=2, blur=1), start=2, end=6, seed=8,
+                  realization=1, radius=5)  # fmt: skip
+    frame = Film(open_dataset(data), realization=1, start=2, end=6).frame
+    origin = (frame.x0, frame.y0)  # the file was tracked from (0, 0)
+    for name, shift in (("cell_x", origin[0]), ("cell_y", origin[1]), ("membrane_x", origin[0])):
+        np.testing.assert_allclose(made[name].values, from_file[name].values + shift, atol=1e-9)
+    np.testing.assert_allclose(made["bot_angle"].values, from_file["bot_angle"].values, atol=1e-12)
+    assert json.loads(made.attrs["softcell_video"].split(": ", 1)[1])["seed"] == 8
+
+
+def test_several_films_are_the_realizations_of_their_radius(films):
+    from softcell.io.netcdf import open_inputs
+
+    _, tracked = films
+    ds = open_inputs([tracked[1], tracked[0], tracked[1]])
+    assert ds["realization"].values.tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(ds["cell_x"].values[0], ds["cell_x"].values[2])
+    assert ds.attrs["softcell_videos"] == '["cell1.mkv", "cell0.mkv", "cell1.mkv"]'
+
+
+def test_films_ask_for_their_radius_length_and_frame_rate(films):
+    from softcell.fit.measure import film_request
+    from softcell.io.netcdf import open_inputs
+    from softcell.model.configuration import RunConfig
+
+    _, tracked = films
+    ds = open_inputs(tracked)
+    config = RunConfig(parameters={"bending_stiffness": 0.3})
+    base, measure = film_request(ds, config, camera={"noise": 0.5}, warmup=10, options={})
+    assert base.parameters["radius"] == 5.0 and base.parameters["bending_stiffness"] == 0.3
+    assert base.parameters["sample_every"] == pytest.approx(1 / 30)
+    np.testing.assert_allclose(measure.spans, [[4.0, 4.0]])  # 121 frames at 30 /s
+    assert base.parameters["duration"] == pytest.approx(10 + 4 + 2 / 30)
+    assert (measure.camera.px_per_cm, measure.camera.fps, measure.camera.noise) == (10, 30, 0.5)
+    assert measure.made(0, 1, seed=3)["end"] == 14.0
+    assert measure.made(0, 1, seed=3) != measure.made(0, 0, seed=3)
+
+
+@pytest.mark.parametrize(
+    "extra,words",
+    [
+        (["--camera-noise", "-1"], "camera noise = -1.0 is not allowed"),
+        (["--warmup", "-3"], "warmup = -3.0 is not allowed"),
+        (["--config", "{radius}"], "the films set the radius"),
+        (["--config", "{prior}"], "unknown table [prior] (did you mean 'priors'?)"),
+        (["--prior", "bending_stiffness=0.1:0.3"], "given 2 times"),
+    ],
+)
+def test_a_bad_film_fit_is_one_line_before_any_simulation(films, tmp_path, capsys, extra, words):
+    from softcell.cli import main
+
+    (tmp_path / "radius.toml").write_text("[parameters]\nradius = 4\n")
+    (tmp_path / "prior.toml").write_text("[prior]\nbending_stiffness = {low = 1, high = 2}\n")
+    extra = [e.format(radius=tmp_path / "radius.toml", prior=tmp_path / "prior.toml")
+             for e in extra]  # fmt: skip
+    _, tracked = films
+    argv = ["fit", *map(str, tracked), "--prior", "bending_stiffness=0.05:1", *extra]
+    code = main([*argv, "-o", str(tmp_path / "fit.nc")])
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "fit.nc").exists() and not (tmp_path / "fit_design").exists()
+
+
+def test_simulation_data_take_no_camera(data, tmp_path, capsys):
+    from softcell.cli import main
+
+    argv = ["fit", str(data), "--prior", "bending_stiffness=0.05:1", "--camera-blur", "2"]
+    assert main([*argv, "-o", str(tmp_path / "fit.nc")]) == 2
+    assert "no camera (that is for films)" in capsys.readouterr().err

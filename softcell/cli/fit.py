@@ -14,14 +14,24 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "data",
         type=Path,
+        nargs="+",
         metavar="DATA",
-        help="simulation files: a folder of softcell simulate (possibly over several radii) "
-        "or one file; every simulation of the fit repeats its request",
+        help="simulation files (a folder of softcell simulate, possibly over several radii, "
+        "or one file: every simulation of the fit repeats its request), or tracked films "
+        "(softcell track; each file a realization: the fit films and tracks its simulations "
+        "alike)",
+    )
+    p.add_argument(
+        "--config",
+        type=Path,
+        metavar="TOML",
+        help="a [priors] table (NAME = {low, high, unit?, scale?}); for films also the model "
+        "and components of the fit's simulations ([parameters], [components])",
     )
     p.add_argument(
         "--prior",
         action="append",
-        required=True,
+        default=[],
         metavar="NAME=LOW:HIGH",
         help="an unknown and its range (repeatable), in the parameter's unit (softcell "
         "params), or 'NAME=LOW:HIGH UNIT' in another unit; log-uniform when HIGH / LOW > 10, "
@@ -43,6 +53,32 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--discard", type=float, metavar="SECONDS", help="seconds the analysis drops first"
     )
+    films = p.add_argument_group("films", "how the fit films its simulations, for tracked data")
+    films.add_argument(
+        "--warmup",
+        type=float,
+        default=15.0,
+        metavar="SECONDS",
+        help="seconds simulated before each film starts (default 15)",
+    )
+    films.add_argument(
+        "--camera-scale",
+        type=float,
+        metavar="PX_PER_CM",
+        help="scale of the fit's films (default: the data's, when tracked on a linear scale)",
+    )
+    films.add_argument(
+        "--camera-noise",
+        type=float,
+        metavar="GREY_LEVELS",
+        help="Gaussian noise of the fit's films (default 2)",
+    )
+    films.add_argument(
+        "--camera-blur",
+        type=float,
+        metavar="PX",
+        help="Gaussian blur of the fit's films (default 1)",
+    )
     p.add_argument(
         "--check-draws",
         type=int,
@@ -63,10 +99,24 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
 def _cmd_fit(args: argparse.Namespace) -> int:
     from softcell.fit.fitting import fit
 
+    config, table = _read_config(args.config)
+    camera = {
+        name: value
+        for name, value in (
+            ("px_per_cm", args.camera_scale),
+            ("noise", args.camera_noise),
+            ("blur", args.camera_blur),
+        )
+        if value is not None
+    }
     out = fit(
         args.data,
         args.prior,
         args.output,
+        prior_table=table,
+        config=config,
+        camera=camera or None,
+        warmup=args.warmup,
         statistics=flags.names(args.statistics) or None,
         simulations=args.simulations,
         seed=args.seed,
@@ -82,11 +132,34 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _read_config(path: Path | None):
+    """The run configuration (None without tables of one) and the ``[priors]`` table of a
+    fit's TOML file."""
+    from softcell.errors import ConfigError
+    from softcell.io.config_file import read_toml
+    from softcell.model.configuration import SECTIONS, config_from_mapping
+    from softcell.model.parameters import suggest
+
+    if path is None:
+        return None, {}
+    tables = read_toml(path)
+    priors = tables.pop("priors", {})
+    for name in tables:
+        if name not in SECTIONS:
+            known = (*SECTIONS, "priors")
+            raise ConfigError(
+                f"{path}: unknown table [{name}]{suggest(name, known)}; tables: {', '.join(known)}"
+            )
+    if not isinstance(priors, dict):
+        raise ConfigError(f"{path}: priors must be a table, [priors]")
+    return (config_from_mapping(tables, path) if tables else None), priors
+
+
 #: The verbs of this module: the one-line help of each, and what adds its flags.
 VERBS = {
     "fit": (
-        "the posterior of unknown parameters from simulation data: a space-filling design of "
-        "simulations, an emulator of the statistics, MCMC",
+        "the posterior of unknown parameters from simulation data or tracked films: a "
+        "space-filling design of simulations, an emulator of the statistics, MCMC",
         _add_fit,
     ),
 }

@@ -46,7 +46,7 @@ def predictive_check(
     *,
     draws: int,
     seed: int,
-    options: dict[str, Any],
+    measure: Any,
     workers: int | None = None,
     scheduler: str | None = None,
     overwrite: bool = False,
@@ -73,8 +73,8 @@ def predictive_check(
         Posterior samples to simulate (>= 2).
     seed : int
         The fit's root seed.
-    options : dict
-        Analysis options (as the fit's).
+    measure : Direct or Filmed
+        How the fit measures its simulations (:mod:`softcell.fit.measure`).
     workers, scheduler, overwrite, progress, log
         As :func:`softcell.runner.points.run_points` takes them.
 
@@ -85,20 +85,17 @@ def predictive_check(
         statistic], ``z`` float64[point, statistic] and ``verdict`` int8[point, statistic]
         (an index of :data:`VERDICTS`).
     """
-    from softcell.fit.design import design_points, statistics_of
+    from softcell.fit.design import design_points
     from softcell.runner.points import run_points
 
     picks = np.linspace(0, samples.shape[0] - 1, draws).round().astype(int)
     values = samples[picks]
     points = design_points(Path(out), base, priors, values)
-    realizations = data.shape[1]
-    for i, (folder, (label, config)) in enumerate(points.items()):
-        run_points(
-            {folder: (f"check {i + 1}/{draws}: {label}", config)},
-            realizations=realizations, seed=check_seed(seed, i), workers=workers,
-            scheduler=scheduler, overwrite=overwrite, progress=progress, log=log,
-        )  # fmt: skip
-    each = statistics_of(list(points), statistics, options)
+    points = {folder: (f"check: {label}", config) for folder, (label, config) in points.items()}
+    seeds = [check_seed(seed, i) for i in range(draws)]
+    run = {"workers": workers, "scheduler": scheduler, "progress": progress, "log": log}
+    run_points(points, realizations=data.shape[1], seed=seeds, overwrite=overwrite, **run)
+    each = measure.statistics(list(points), statistics, seed=seeds, **run)
     z, verdict = judge(data, each)
     return {"values": values, "each": each, "z": z, "verdict": verdict}
 

@@ -11,19 +11,23 @@ likelihood (:mod:`softcell.fit.inference`). The design's simulations are files u
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from softcell.errors import ConfigError
-from softcell.fit.priors import Prior, parse_prior
+from softcell.fit.measure import WARMUP
+from softcell.fit.priors import Prior, parse_prior, priors_from_table
 from softcell.fit.statistics import DEFAULT_STATISTICS, check_statistics, observed
 from softcell.model.configuration import RunConfig
+from softcell.video.film import Camera
 
 #: The posterior quantiles a fit stores for every unknown: the median and the 90 % interval.
 QUANTILES = (0.05, 0.5, 0.95)
+#: The fit's root seed for films, unless told otherwise (a film does not know its seed).
+FILM_SEED = 1
 
 
 def data_request(ds) -> tuple[RunConfig, int]:
@@ -33,8 +37,8 @@ def data_request(ds) -> tuple[RunConfig, int]:
     Raises
     ------
     ConfigError
-        For data that are no simulation of one cell (tracked films need their design given:
-        not yet), or an assembly.
+        For data that are no simulation of one cell, or an assembly (films are read by
+        :func:`~softcell.fit.measure.film_request`).
     """
     if ds.attrs.get("softcell_origin") != "simulation":
         raise ConfigError(
@@ -51,10 +55,14 @@ def data_request(ds) -> tuple[RunConfig, int]:
 
 
 def fit(
-    data: str | Path,
+    data: str | Path | Sequence[str | Path],
     priors: Sequence[str | Prior],
     out: str | Path,
     *,
+    prior_table: Mapping[str, Mapping[str, Any]] | None = None,
+    config: RunConfig | None = None,
+    camera: Camera | Mapping[str, float] | None = None,
+    warmup: float = WARMUP,
     statistics: Sequence[str] | None = None,
     simulations: int = 32,
     seed: int | None = None,
@@ -70,12 +78,26 @@ def fit(
 
     Parameters
     ----------
-    data : path-like
-        Simulation files (a folder of ``softcell simulate``, or one file).
+    data : path-like or sequence of path-like
+        Simulation files (a folder of ``softcell simulate``, or one file), or tracked films
+        (``softcell track``: each file a realization, at one radius or several).
     priors : sequence of str or Prior
         The unknowns: ``NAME=LOW:HIGH [UNIT]`` (see :func:`~softcell.fit.priors.parse_prior`).
     out : path-like
         The fit's file (NetCDF); the design's simulations go to ``<out>_design/``.
+    prior_table : mapping, optional
+        More unknowns, as a configuration file's ``[priors]`` table: ``NAME = {low, high,
+        unit?, scale?}`` (see :func:`~softcell.fit.priors.priors_from_table`).
+    config : RunConfig, optional
+        For films: the model and components of the fit's simulations (default softcell's);
+        the films set the radius, the duration and the sampling. Simulation data repeat
+        their own request: no ``config``.
+    camera : Camera or mapping, optional
+        For films: how the fit films its simulations, or some of its settings
+        (``px_per_cm``, ``noise``, ``blur``); default: the data's scale and frame rate,
+        noise 2 grey levels, blur 1 px.
+    warmup : float
+        For films: seconds simulated before each design film starts (default 15 s).
     statistics : sequence of str, optional
         What data and simulations are compared by (analysis variables with a value per
         realization; default :data:`~softcell.fit.statistics.DEFAULT_STATISTICS`).
@@ -86,7 +108,7 @@ def fit(
         from it. It must differ from the data's own seed (default: the data's seed + 1).
     discard : float, optional
         Seconds dropped at the start of every realization by the analysis (default: the
-        analysis's).
+        analysis's for simulations, 0 for films).
     check_draws : int
         Posterior draws re-simulated for the predictive check (0: no check); their runs go
         to ``<out>_check/``.
@@ -113,19 +135,20 @@ def fit(
     from softcell.analysis import analyze
     from softcell.components.registry import default_registry
     from softcell.fit.check import corner_figure, predictive_check
-    from softcell.fit.design import run_design, space_filling, statistics_of
+    from softcell.fit.design import run_design, space_filling
     from softcell.fit.inference import fit_emulator, sample_posterior
     from softcell.io.files import check_output
-    from softcell.io.netcdf import open_dataset
+    from softcell.io.netcdf import open_inputs
     from softcell.model.parameters import MODEL_PARAMETERS
 
     say = log or (lambda _: None)
-    out = check_output(Path(out), "fit", inputs=[data], overwrite=overwrite)
+    paths = [Path(data)] if isinstance(data, (str, Path)) else [Path(d) for d in data]
+    out = check_output(Path(out), "fit", inputs=paths, overwrite=overwrite)
     figure = check_output(out.with_suffix(".png"), "figure", overwrite=overwrite)
     _check_draws(check_draws)
-    ds = open_dataset(data)
-    base, data_seed = data_request(ds)
-    seed = data_seed + 1 if seed is None else seed
+    ds = open_inputs(paths)
+    base, data_seed, measure = _request(ds, config, camera, warmup, discard)
+    seed = (FILM_SEED if data_seed is None else data_seed + 1) if seed is None else seed
     if seed == data_seed:
         raise ConfigError(
             f"the data was simulated from seed {data_seed}: the fit's simulations must draw "
@@ -133,31 +156,31 @@ def fit(
         )
     specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
     priors = [p if isinstance(p, Prior) else parse_prior(p, specs) for p in priors]
+    priors += priors_from_table(prior_table or {}, specs)
+    _check_distinct(priors)
     statistics = check_statistics(DEFAULT_STATISTICS if statistics is None else statistics)
     values = space_filling(priors, simulations, seed)
-    options = {} if discard is None else {"discard": float(discard)}
-    seen = observed(analyze(ds, options), statistics)
+    seen = observed(analyze(ds, measure.options), statistics)
     realizations = seen.each.shape[1]
     say(f"design: {simulations} points x {realizations} realizations ({seen.each.shape[0]} "
-        f"point(s) of the data each)")  # fmt: skip
+        f"point(s) of the data each), measured from {measure.describe()}")  # fmt: skip
+    run = {"workers": workers, "scheduler": scheduler, "progress": progress, "log": log}
     folders = run_design(
         out.parent / f"{out.stem}_design", base, priors, values,
-        realizations=realizations, seed=seed, workers=workers, scheduler=scheduler,
-        overwrite=overwrite, progress=progress, log=log,
+        realizations=realizations, seed=seed, overwrite=overwrite, **run,
     )  # fmt: skip
     say("analysing the design")
-    each = statistics_of(folders, statistics, options)
+    each = measure.statistics(folders, statistics, seed=seed, **run)
     say("emulating the statistics and sampling the posterior")
     emulator = fit_emulator(priors, values, _flat(each), seed=seed)
     draws = sample_posterior(emulator, _flat(seen.each[None])[0], seed=seed)
-    result = _dataset(priors, draws, values, each, seen, statistics, base, seed, Path(data))
+    result = _dataset(priors, draws, values, each, seen, statistics, base, seed, paths, measure)
     corner_figure(figure, priors, draws)
     if check_draws:
         say(f"predictive check: {check_draws} posterior draws re-simulated")
         check = predictive_check(
             out.parent / f"{out.stem}_check", base, priors, draws, seen.each, statistics,
-            draws=check_draws, seed=seed, options=options, workers=workers,
-            scheduler=scheduler, overwrite=overwrite, progress=progress, log=log,
+            draws=check_draws, seed=seed, measure=measure, overwrite=overwrite, **run,
         )  # fmt: skip
         result = result.merge(_check_dataset(priors, check))
         _report(say, statistics, check)
@@ -165,6 +188,32 @@ def fit(
     for p, (low, mid, high) in zip(priors, _intervals(draws), strict=True):
         say(f"{p.name} = {mid:.4g} {p.unit} (90 % interval {low:.4g} .. {high:.4g})")
     return out
+
+
+def _request(ds, config, camera, warmup, discard):
+    """The design's request, the data's seed (None for films) and how the design is
+    measured, for data ``ds``."""
+    from softcell.fit.measure import Direct, film_request
+
+    if ds.attrs.get("softcell_origin") == "tracking":
+        options = {"discard": 0.0 if discard is None else float(discard)}
+        base, measure = film_request(ds, config, camera=camera, warmup=warmup, options=options)
+        return base, None, measure
+    for name, given in (("config", config), ("camera", camera)):
+        if given is not None:
+            raise ConfigError(
+                f"a fit of simulation data repeats their request: no {name} (that is for films)"
+            )
+    base, data_seed = data_request(ds)
+    return base, data_seed, Direct({} if discard is None else {"discard": float(discard)})
+
+
+def _check_distinct(priors: Sequence[Prior]) -> None:
+    """Refuse an unknown given two priors."""
+    names = [p.name for p in priors]
+    for name in names:
+        if names.count(name) > 1:
+            raise ConfigError(f"the prior of {name} is given {names.count(name)} times: give one")
 
 
 def _check_draws(value: object) -> None:
@@ -194,7 +243,7 @@ def _intervals(draws: np.ndarray) -> np.ndarray:
     return np.quantile(draws, QUANTILES, axis=0).T
 
 
-def _dataset(priors, draws, values, each, seen, statistics, base, seed, data: Path):
+def _dataset(priors, draws, values, each, seen, statistics, base, seed, data, measure):
     """The fit as an xarray Dataset with CF attributes."""
     import xarray as xr
 
@@ -224,7 +273,8 @@ def _dataset(priors, draws, values, each, seen, statistics, base, seed, data: Pa
         "softcell_version": __version__,
         "softcell_origin": "fit",
         "softcell_seed": seed,
-        "softcell_data": str(data),
+        "softcell_data": json.dumps([str(d) for d in data]),
+        "softcell_measured": measure.describe(),
         "softcell_priors": json.dumps([p.__dict__ for p in priors]),
         "statistic_units": json.dumps(dict(zip(statistics, seen.units, strict=True))),
         "softcell_parameters": json.dumps(base.parameters),

@@ -20,6 +20,17 @@ def load_config(path: str | os.PathLike[str]) -> RunConfig:
         table or key (with a suggestion), or a value of the wrong type. Parameter values
         are validated later, by :class:`softcell.Parameters`.
     """
+    return config_from_mapping(read_toml(path), path)
+
+
+def read_toml(path: str | os.PathLike[str]) -> dict:
+    """The tables of a TOML file.
+
+    Raises
+    ------
+    ConfigError
+        For a missing, unreadable or non-UTF-8 file, a directory, or bad TOML.
+    """
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -37,4 +48,4 @@ def load_config(path: str | os.PathLike[str]) -> RunConfig:
         raise ConfigError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    return config_from_mapping(data, path)
+    return data

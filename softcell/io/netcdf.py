@@ -430,6 +430,7 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
     """
     names = names or [f"dataset {i}" for i in range(len(parts))]
     values = _stored_parameters(parts, names)
+    parts = _numbered_films(parts, values)
     keys = sorted(set().union(*values))
     swept = [k for k in keys if len({json.dumps(v.get(k)) for v in values}) > 1]
     follows = _followers(swept, values)
@@ -459,7 +460,28 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
         merged[key] = sorted({v[key] for v in values})
     combined.attrs["softcell_parameters"] = json.dumps(merged)
     combined.attrs["softcell_swept_parameters"] = " ".join(swept)
+    if all("softcell_video" in ds.attrs for ds in parts):
+        combined.attrs["softcell_videos"] = json.dumps([ds.attrs["softcell_video"] for ds in parts])
     return combined
+
+
+def _numbered_films(parts: list[xr.Dataset], values: list[dict[str, Any]]) -> list[xr.Dataset]:
+    """Tracked films numbered as the realizations of their point: each film is realization 0
+    of its own file, and the films of one radius are realizations 0, 1, ... in the order
+    given (the order ``softcell_videos`` records). Other files are returned as they are."""
+    if not all(ds.attrs.get("softcell_origin") == "tracking" for ds in parts):
+        return parts
+    count: dict[str, int] = {}
+    numbered = []
+    for ds, vals in zip(parts, values, strict=True):
+        key = json.dumps(vals, sort_keys=True)
+        index = count.get(key, 0)
+        count[key] = index + ds.sizes["realization"]
+        realization = np.arange(index, count[key])
+        numbered.append(
+            ds.assign_coords(realization=("realization", realization, ds["realization"].attrs))
+        )
+    return numbered
 
 
 def _coordinate_attrs(name: str, unit: str) -> dict[str, str]:

@@ -10,7 +10,7 @@ resumable as ``softcell simulate``'s runs are.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
@@ -42,7 +42,7 @@ def run_points(
     points: dict[Path, tuple[str, Any]],
     *,
     realizations: int,
-    seed: int,
+    seed: int | Sequence[int],
     workers: int | None = None,
     scheduler: str | None = None,
     overwrite: bool = False,
@@ -59,8 +59,8 @@ def run_points(
         Folder -> (a label for the log, the RunConfig it runs).
     realizations : int
         Realizations per point.
-    seed : int
-        The root seed.
+    seed : int or sequence of int
+        The root seed of every point, or one per point (in order).
     workers : int, optional
         Local worker processes (default: every core, unless ``scheduler`` is given).
     scheduler : str, optional
@@ -84,8 +84,11 @@ def run_points(
     from softcell.runner.ensemble import plan, simulate
 
     registry = default_registry()
-    for folder, (_, config) in points.items():
-        plan(config, folder, realizations=realizations, seed=seed, registry=registry)
+    seeds = [seed] * len(points) if isinstance(seed, int) else list(seed)
+    if len(seeds) != len(points):
+        raise SoftcellError(f"{len(seeds)} seeds for {len(points)} points: one each")
+    for (folder, (_, config)), root in zip(points.items(), seeds, strict=True):
+        plan(config, folder, realizations=realizations, seed=root, registry=registry)
     if planned is not None:
         planned()
     say = log or (lambda _: None)
@@ -98,7 +101,7 @@ def run_points(
                 config,
                 folder,
                 realizations=realizations,
-                seed=seed,
+                seed=seeds[i],
                 client=client,
                 progress=progress,
                 overwrite=overwrite,

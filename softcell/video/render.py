@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -138,57 +139,39 @@ def render(
     )
     path = Path(path)
     fourcc = cv2.VideoWriter_fourcc(*codec(path))
-    sel = _realization(ds, realization, point)
-    time = np.asarray(sel["time"].values, dtype=np.float64)
-    valid = np.isfinite(np.asarray(sel["bot_x"].values))
-    time_valid = time[valid]
-    times, notes, coarse, on_grid = _frame_times(time_valid, start, end, fps)
-    t0, t1 = times[0], float(time_valid[-1] if end is None else end)
-    mx = np.asarray(sel["membrane_x"].transpose("time", "node").values)[valid]
-    my = np.asarray(sel["membrane_y"].transpose("time", "node").values)[valid]
-    bx, by = np.asarray(sel["bot_x"].values)[valid], np.asarray(sel["bot_y"].values)[valid]
-    angle = np.unwrap(np.asarray(sel["bot_angle"].values)[valid])
-    params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
-    a, b = float(params.get("bot_semi_major", 3.0)), float(params.get("bot_semi_minor", 2.0))
-    span = (time_valid >= t0) & (time_valid <= t1)
-    frame = _frame_for(mx, my, span, px_per_cm, size)
-    rng = np.random.default_rng(seed)
-    background = _background(frame, illumination)
+    film = Film(
+        ds,
+        realization=realization,
+        point=point,
+        px_per_cm=px_per_cm,
+        fps=fps,
+        size=size,
+        start=start,
+        end=end,
+    )
+    times, frame = film.times, film.frame
     from softcell.settings import progress_bar_class
 
     tqdm = progress_bar_class()
 
     frame_bytes = DISK_CHECK_EVERY * 3 * frame.width * frame.height  # uncompressed, at most
+    images = film.images(
+        band_width=band_width,
+        head_mark=head_mark,
+        noise=noise,
+        blur=blur,
+        illumination=illumination,
+        seed=seed,
+    )
     with atomic_write(path) as tmp:
         writer = cv2.VideoWriter(str(tmp), fourcc, fps, (frame.width, frame.height))
         if not writer.isOpened():
             raise SoftcellError(f"cannot open {path} for writing with codec {codec(path)}")
         try:
-            for index, t in enumerate(
-                tqdm(times, disable=not progress, desc="render", unit="frame")
+            for index, image in enumerate(
+                tqdm(images, total=times.size, disable=not progress, desc="render", unit="frame")
             ):
-                k = int(
-                    np.clip(
-                        np.searchsorted(time_valid, t, side="right") - 1, 0, time_valid.size - 2
-                    )
-                )
-                w = (t - time_valid[k]) / (time_valid[k + 1] - time_valid[k])
-                state = {
-                    name: (1 - w) * arr[k] + w * arr[k + 1]
-                    for name, arr in (
-                        ("mx", mx),
-                        ("my", my),
-                        ("bx", bx),
-                        ("by", by),
-                        ("angle", angle),
-                    )
-                }
-                image = _draw(frame, background, state, a, b, band_width, head_mark)
-                if blur > 0:
-                    image = cv2.GaussianBlur(image, (0, 0), blur)
-                if noise > 0:
-                    image = image + rng.normal(0.0, noise, image.shape)
-                writer.write(np.clip(np.rint(image), 0, 255).astype(np.uint8))
+                writer.write(image)
                 if index and index % DISK_CHECK_EVERY == 0:
                     # OpenCV's writer reports no failed write: watch the disk instead.
                     problem = storage_problem(tmp, need=frame_bytes)
@@ -204,7 +187,95 @@ def render(
             raise StorageError(
                 f"cannot write {path}: {problem} ({written} of {times.size} frames read back)"
             )
-    return RenderInfo(path, times, frame, not on_grid, coarse, notes)
+    return RenderInfo(path, times, frame, film.interpolated, film.coarse, film.notes)
+
+
+class Film:
+    """One realization's frames, drawn as :func:`render` films them (without writing them):
+    the frame times, the pixel geometry, and the images on demand.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A simulation Dataset (``membrane_x/y``, ``bot_x/y``, ``bot_angle``; cm, rad).
+    realization, point, px_per_cm, fps, size, start, end
+        As for :func:`render`.
+
+    Attributes
+    ----------
+    times : numpy.ndarray
+        float64[frame]: each frame's time (s).
+    frame : Frame
+        The pixel geometry.
+    interpolated, coarse : bool
+        Whether frames fall between samples; whether the record is coarser than the film
+        somewhere.
+    notes : list of str
+        What a user should know of the interpolation.
+    """
+
+    def __init__(
+        self,
+        ds: xr.Dataset,
+        *,
+        realization: int = 0,
+        point: dict[str, int] | None = None,
+        px_per_cm: float = 10.0,
+        fps: float = 30.0,
+        size: tuple[int, int] | None = None,
+        start: float | None = None,
+        end: float | None = None,
+    ) -> None:
+        sel = _realization(ds, realization, point)
+        time = np.asarray(sel["time"].values, dtype=np.float64)
+        valid = np.isfinite(np.asarray(sel["bot_x"].values))
+        self._time = time[valid]
+        self.times, self.notes, self.coarse, on_grid = _frame_times(self._time, start, end, fps)
+        self.interpolated = not on_grid
+        t0, t1 = self.times[0], float(self._time[-1] if end is None else end)
+        self._state = {
+            "mx": np.asarray(sel["membrane_x"].transpose("time", "node").values)[valid],
+            "my": np.asarray(sel["membrane_y"].transpose("time", "node").values)[valid],
+            "bx": np.asarray(sel["bot_x"].values)[valid],
+            "by": np.asarray(sel["bot_y"].values)[valid],
+            "angle": np.unwrap(np.asarray(sel["bot_angle"].values)[valid]),
+        }
+        params = json.loads(ds.attrs.get("softcell_parameters", "{}"))
+        self._axes = (
+            float(params.get("bot_semi_major", 3.0)),
+            float(params.get("bot_semi_minor", 2.0)),
+        )
+        span = (self._time >= t0) & (self._time <= t1)
+        self.frame = _frame_for(self._state["mx"], self._state["my"], span, px_per_cm, size)
+
+    def images(
+        self,
+        *,
+        band_width: float = 0.3,
+        head_mark: bool = True,
+        noise: float = 0.0,
+        blur: float = 0.0,
+        illumination: float = 0.0,
+        seed: int = 0,
+    ) -> Iterator[np.ndarray]:
+        """Each frame as uint8[height, width, 3] BGR, one at a time; the arguments as for
+        :func:`render` (the same seed draws the same noise, frame by frame)."""
+        check_seed(seed)
+        rng = np.random.default_rng(seed)
+        background = _background(self.frame, illumination)
+        a, b = self._axes
+        time = self._time
+        for t in self.times:
+            k = int(np.clip(np.searchsorted(time, t, side="right") - 1, 0, time.size - 2))
+            w = (t - time[k]) / (time[k + 1] - time[k])
+            state = {name: (1 - w) * arr[k] + w * arr[k + 1] for name, arr in self._state.items()}
+            image = _draw(self.frame, background, state, a, b, band_width, head_mark)
+            if blur > 0:
+                image = cv2.GaussianBlur(image, (0, 0), blur)
+            if noise > 0:
+                image += rng.normal(0.0, noise, image.shape)
+            np.rint(image, out=image)
+            yield np.clip(image, 0, 255, out=image).astype(np.uint8)
 
 
 def _check_render_arguments(**values: float) -> None:
@@ -264,13 +335,13 @@ def _frame_times(
             f"render span [{t0}, {t1}] s is not inside the record "
             f"[{time_valid[0]}, {time_valid[-1]}] s"
         )
-    count = np.floor((t1 - t0) * fps + 1e-9) + 1
+    count = frame_count(t0, t1, fps)
     if count > MAX_FRAMES:
         raise SoftcellError(
             f"fps = {fps:g} 1/s over [{t0:g}, {t1:g}] s makes {count:.3g} frames, more than "
             f"{MAX_FRAMES:,}; lower --fps or shorten the span (--start, --end)"
         )
-    times = t0 + np.arange(int(count)) / fps
+    times = t0 + np.arange(count) / fps
     notes = []
     step = np.diff(time_valid[(time_valid >= t0) & (time_valid <= t1)])
     coarse = bool(step.size and step.max() > 1.0 / fps * (1 + 1e-9))
@@ -284,6 +355,11 @@ def _frame_times(
     if not on_grid:
         notes.append("frame times fall between samples: states are interpolated linearly")
     return times, notes, coarse, on_grid
+
+
+def frame_count(start: float, end: float, fps: float) -> int:
+    """Frames at ``start`` + k / ``fps`` up to ``end`` (s), both ends included."""
+    return int(np.floor((end - start) * fps + 1e-9)) + 1
 
 
 def _frame_for(
@@ -363,8 +439,14 @@ def _draw(
         )
     image = background.copy()
     for layer, colour in ((bot, BOT), (mark, MARK), (band, BAND)):  # the wall hides the bot
-        alpha = layer.astype(np.float64)[..., None] / 255.0
-        image = image * (1 - alpha) + alpha * np.asarray(colour, dtype=np.float64)
+        # Where a layer is 0 the blend leaves the image as it is, bit for bit: blend only
+        # within the box of its drawn pixels.
+        x, y, w, h = cv2.boundingRect(layer)
+        if not w:
+            continue
+        box = (slice(y, y + h), slice(x, x + w))
+        alpha = layer[box].astype(np.float64)[..., None] / 255.0
+        image[box] = image[box] * (1 - alpha) + alpha * np.asarray(colour, dtype=np.float64)
     return image
 
 

@@ -236,7 +236,7 @@ def track(
         )
         total = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) or None
         with _overlay_writer(overlay, rate, width, height) as draw:
-            result = _track_frames(
+            result = track_frames(
                 itertools.chain([first], frames), tracker, rate, total, progress, on_frame, draw
             )
     finally:
@@ -400,7 +400,7 @@ def _check_track_arguments(
         raise SoftcellError(f"video file {video} is empty")
 
 
-def _track_frames(
+def track_frames(
     frames: Iterator[np.ndarray],
     tracker: Tracker,
     rate: float,
