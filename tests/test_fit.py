@@ -499,3 +499,39 @@ def test_simulation_data_take_no_camera(data, tmp_path, capsys):
     argv = ["fit", str(data), "--prior", "bending_stiffness=0.05:1", "--camera-blur", "2"]
     assert main([*argv, "-o", str(tmp_path / "fit.nc")]) == 2
     assert "no camera (that is for films)" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_films_of_a_simulated_cell_hold_its_true_stiffness_and_friction(tmp_path):
+    """The experiment's pipeline end to end: a cell of known k and gamma_mem simulated,
+    filmed (softcell render) and tracked (softcell track) as a user would, then fitted."""
+    import xarray as xr
+
+    from softcell.cli import main
+
+    truth = {"bending_stiffness": 0.2, "membrane_friction": 3.42e-4}
+    argv = ["simulate", "--radius", "5", "--duration", "45", "--realizations", "3"]
+    argv += ["--bending-stiffness", "0.2", "--membrane-friction", "3.42e-4", "--seed", "11"]
+    assert main([*argv, "-o", str(tmp_path / "cell"), "--quiet"]) == 0
+    films = []
+    for r in range(3):
+        movie, out = tmp_path / f"cell{r}.mkv", tmp_path / f"tracked{r}.nc"
+        argv = ["render", str(tmp_path / "cell"), "-o", str(movie), "--realization", str(r)]
+        argv += ["--start", "15", "--end", "45", "--noise", "2", "--blur", "1"]
+        assert main([*argv, "--seed", str(100 + r), "--quiet"]) == 0
+        argv = ["track", str(movie), "-o", str(out), "--px-per-cm", "10", "--radius", "5"]
+        assert main([*argv, "--quiet"]) == 0
+        movie.unlink()
+        films.append(str(out))
+    out = tmp_path / "fit.nc"
+    argv = ["fit", *films, "--prior", "bending_stiffness=0.05:0.8"]
+    argv += ["--prior", "membrane_friction=1.5e-4:8e-4", "--simulations", "16"]
+    assert main([*argv, "--check-draws", "0", "--workers", "2", "--quiet", "-o", str(out)]) == 0
+    result = xr.open_dataset(out)
+    for name, value in truth.items():
+        low, _, high = result[f"{name}_interval"].values
+        assert low <= value <= high, (name, low, high)
+    low, _, high = result["bending_stiffness_interval"].values
+    assert high / low < 2  # against 16 for the prior
+    assert result.attrs["softcell_measured"].startswith("filmed (10 px/cm, 30 frames/s")
+    assert len(list(tmp_path.glob("fit_design/point*_films/*.nc"))) == 16 * 3

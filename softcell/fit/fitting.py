@@ -176,6 +176,10 @@ def fit(
     draws = sample_posterior(emulator, _flat(seen.each[None])[0], seed=seed)
     result = _dataset(priors, draws, values, each, seen, statistics, base, seed, paths, measure)
     corner_figure(figure, priors, draws)
+    for p, (low, _, high) in zip(priors, _intervals(draws), strict=True):
+        share = (p.quantile(high) - p.quantile(low)) * 100
+        say(f"posterior from {simulations} design points: {p.name} in {low:.4g} .. {high:.4g} "
+            f"{p.unit} (90 %; {share:.0f} % of the prior, in its quantiles)")  # fmt: skip
     if check_draws:
         say(f"predictive check: {check_draws} posterior draws re-simulated")
         check = predictive_check(
