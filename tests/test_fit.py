@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 from hypothesis import given
 from hypothesis import strategies as st
 from scipy import integrate
@@ -360,8 +361,6 @@ def test_a_bad_fit_is_one_line_before_any_simulation(data, tmp_path, capsys, arg
 
 @pytest.mark.slow
 def test_a_fit_of_simulated_data_holds_its_true_stiffness(data, tmp_path):
-    import xarray as xr
-
     from softcell.cli import main
 
     out = tmp_path / "fit.nc"
@@ -505,8 +504,6 @@ def test_simulation_data_take_no_camera(data, tmp_path, capsys):
 def test_films_of_a_simulated_cell_hold_its_true_stiffness_and_friction(tmp_path):
     """The experiment's pipeline end to end: a cell of known k and gamma_mem simulated,
     filmed (softcell render) and tracked (softcell track) as a user would, then fitted."""
-    import xarray as xr
-
     from softcell.cli import main
 
     truth = {"bending_stiffness": 0.2, "membrane_friction": 3.42e-4}
@@ -535,3 +532,26 @@ def test_films_of_a_simulated_cell_hold_its_true_stiffness_and_friction(tmp_path
     assert high / low < 2  # against 16 for the prior
     assert result.attrs["softcell_measured"].startswith("filmed (10 px/cm, 30 frames/s")
     assert len(list(tmp_path.glob("fit_design/point*_films/*.nc"))) == 16 * 3
+
+
+def test_a_film_fit_run_again_films_nothing_again_and_draws_the_same_posterior(films, tmp_path):
+    """Every design simulation and film is a file: a fit rerun (or resumed) reuses them, and
+    the same seed draws the same posterior."""
+    from softcell.fit.fitting import fit
+
+    _, tracked = films
+    lines: list[str] = []
+    kwargs = {"simulations": 2, "check_draws": 0, "warmup": 2.0, "workers": 1,
+              "statistics": ["ipr_mean", "mean_speed"], "progress": False}  # fmt: skip
+    out = fit(tracked, ["bending_stiffness=0.1:0.4"], tmp_path / "fit.nc", log=lines.append,
+              **kwargs)  # fmt: skip
+    assert any(line.startswith("filming and tracking 4 realizations") for line in lines)
+    films_made = sorted(tmp_path.glob("fit_design/point*_films/*.nc"))
+    stamps = [f.stat().st_mtime_ns for f in films_made]
+    first = xr.open_dataset(out)["bending_stiffness"].values
+    lines.clear()
+    again = fit(tracked, ["bending_stiffness=0.1:0.4"], tmp_path / "fit.nc", log=lines.append,
+                overwrite=True, **kwargs)  # fmt: skip
+    assert not any("filming" in line for line in lines)
+    assert [f.stat().st_mtime_ns for f in films_made] == stamps and len(stamps) == 4
+    np.testing.assert_array_equal(xr.open_dataset(again)["bending_stiffness"].values, first)
