@@ -555,3 +555,65 @@ def test_a_film_fit_run_again_films_nothing_again_and_draws_the_same_posterior(f
     assert not any("filming" in line for line in lines)
     assert [f.stat().st_mtime_ns for f in films_made] == stamps and len(stamps) == 4
     np.testing.assert_array_equal(xr.open_dataset(again)["bending_stiffness"].values, first)
+
+
+# -- the paper's picture as a target ------------------------------------------------------
+
+
+def _table(**verdicts: str) -> list[dict[str, str]]:
+    return [
+        {"topic": topic, "verdict": verdict.replace("_", " ")}
+        for topic, verdict in verdicts.items()
+    ]
+
+
+def test_a_points_score_is_the_share_of_its_measured_findings_that_agree():
+    from softcell.fit.picture import scores, verdict_matrix
+
+    tables = [
+        _table(a="agrees", b="partly", c="differs", d="holds_by_construction"),
+        _table(a="differs", b="differs", c="not_measured", e="agrees"),
+        _table(d="holds_by_construction"),
+    ]
+    topics, matrix = verdict_matrix(tables)
+    assert topics == ["a", "b", "c", "d", "e"]
+    assert matrix.shape == (3, 5) and matrix[0, 4] == 4  # "e" not in the first table
+    np.testing.assert_allclose(scores(matrix), [(1 + 0.5 + 0) / 3, 1 / 3, np.nan])
+
+
+def test_findings_pull_against_each_other_when_they_never_agree_together():
+    from softcell.fit.picture import tensions, verdict_matrix
+
+    tables = [
+        _table(a="agrees", b="differs", c="agrees"),
+        _table(a="differs", b="agrees", c="agrees"),
+        _table(a="partly", b="agrees", c="differs"),
+    ]
+    pulls = tensions(*verdict_matrix(tables))
+    assert pulls == [{"findings": ["a", "b"], "agrees": [1, 2], "points": 3}]
+
+
+@pytest.mark.slow
+def test_a_search_scores_every_point_against_the_papers_findings(tmp_path):
+    from dataclasses import replace
+
+    from softcell.fit.picture import SEARCH_DESIGN, search
+
+    design = replace(SEARCH_DESIGN, radii=(4.0, 6.0), realizations=2, duration=40.0,
+                     free_bot_realizations=2)  # fmt: skip
+    prior = Prior("bending_stiffness", 0.05, 0.8, "N cm2", "log")
+    out = search([prior], tmp_path / "search.nc", points=2, design=design, workers=1,
+                 progress=False, log=None)  # fmt: skip
+    result = xr.open_dataset(out)
+    assert (
+        result.sizes["design_point"] == 2 and result["bending_stiffness"].attrs["units"] == "N cm2"
+    )
+    for i in range(2):  # each point's verdicts are its reproduction's findings table
+        import json
+
+        table = json.loads((tmp_path / f"search_points/point{i:04d}/findings.json").read_text())
+        verdicts = {row["topic"]: row["verdict"] for row in table["findings"]}
+        flags = result["verdict"].attrs["flag_meanings"].split()
+        for topic, flag in zip(result["finding"].values, result["verdict"].values[i], strict=True):
+            assert flags[flag].replace("_", " ") == verdicts[topic]
+    assert "| point | bending_stiffness (N cm2) | score |" in out.with_suffix(".md").read_text()

@@ -32,7 +32,8 @@ LEVELS: tuple[tuple[str, ...], ...] = (
     ("video",),
     ("runner",),
     ("paper",),
-    ("studies", "fit"),
+    ("studies",),
+    ("fit",),  # a search of the unknowns runs the studies' variants
     ("plugin",),
     ("testing", "cli"),
     ("__main__", "__init__"),

@@ -14,12 +14,18 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "data",
         type=Path,
-        nargs="+",
+        nargs="*",
         metavar="DATA",
         help="simulation files (a folder of softcell simulate, possibly over several radii, "
         "or one file: every simulation of the fit repeats its request), or tracked films "
         "(softcell track; each file a realization: the fit films and tracks its simulations "
         "alike)",
+    )
+    p.add_argument(
+        "--paper",
+        action="store_true",
+        help="no data: score the paper's findings at every design point instead (each runs "
+        "the quick design without its film) and write where they hold",
     )
     p.add_argument(
         "--config",
@@ -100,6 +106,12 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from softcell.fit.fitting import fit
 
     config, table = _read_config(args.config)
+    if args.paper:
+        return _cmd_search(args, config, table)
+    if not args.data:
+        from softcell.errors import ConfigError
+
+        raise ConfigError("give DATA (the files to fit), or --paper")
     camera = {
         name: value
         for name, value in (
@@ -129,6 +141,41 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         log=flags.note,
     )
     print(f"done: {out}")
+    return 0
+
+
+def _cmd_search(args: argparse.Namespace, config, table) -> int:
+    """``softcell fit --paper``: the paper's findings across a design of the unknowns."""
+    from softcell.components.registry import default_registry
+    from softcell.errors import ConfigError
+    from softcell.fit.fitting import check_distinct
+    from softcell.fit.picture import search
+    from softcell.fit.priors import parse_prior, priors_from_table
+    from softcell.model.configuration import RunConfig
+    from softcell.model.parameters import MODEL_PARAMETERS
+
+    if args.data:
+        raise ConfigError(f"--paper takes no data: {args.data[0]} given")
+    for flag in ("statistics", "discard", "camera_scale", "camera_noise", "camera_blur"):
+        if getattr(args, flag) is not None:
+            raise ConfigError(f"--{flag.replace('_', '-')} is for data, not --paper")
+    base = config or RunConfig()
+    specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
+    priors = [parse_prior(text, specs) for text in args.prior] + priors_from_table(table, specs)
+    check_distinct(priors)
+    out = search(
+        priors,
+        args.output,
+        points=args.simulations,
+        config=config,
+        seed=0 if args.seed is None else args.seed,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+        log=flags.note,
+    )
+    print(f"done: {out} (and {out.with_suffix('.md')})")
     return 0
 
 

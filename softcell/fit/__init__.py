@@ -1,4 +1,5 @@
-"""Fitting the model's unknowns to data: priors over parameters, the summary statistics that
-data and simulations are compared by, and (to come) the design of simulations and the
-inference that turns them into a posterior.
+"""Fitting the model's unknowns: to data (simulations, or tracked films that the fit's own
+simulations are filmed and tracked like), through a space-filling design of simulations, an
+emulator of their statistics and MCMC; or to the paper's picture, its findings scored across
+a design of the unknowns.
 """

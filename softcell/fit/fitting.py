@@ -157,7 +157,7 @@ def fit(
     specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
     priors = [p if isinstance(p, Prior) else parse_prior(p, specs) for p in priors]
     priors += priors_from_table(prior_table or {}, specs)
-    _check_distinct(priors)
+    check_distinct(priors)
     statistics = check_statistics(DEFAULT_STATISTICS if statistics is None else statistics)
     values = space_filling(priors, simulations, seed)
     seen = observed(analyze(ds, measure.options), statistics)
@@ -212,7 +212,7 @@ def _request(ds, config, camera, warmup, discard):
     return base, data_seed, Direct({} if discard is None else {"discard": float(discard)})
 
 
-def _check_distinct(priors: Sequence[Prior]) -> None:
+def check_distinct(priors: Sequence[Prior]) -> None:
     """Refuse an unknown given two priors."""
     names = [p.name for p in priors]
     for name in names:

@@ -177,6 +177,7 @@ def run_variants(
     overwrite: bool,
     progress: bool,
     log: Callable[[str], None] | None,
+    scheduler: str | None = None,
 ) -> None:
     """Reproduce each variant of ``base`` into ``out/<variant>`` from one root seed; a
     variant that finished there (same design, seed and version) is kept as it is.
@@ -201,6 +202,7 @@ def run_variants(
             design,
             seed=seed,
             workers=workers,
+            scheduler=scheduler,
             overwrite=overwrite,
             progress=progress,
             log=log,
