@@ -449,6 +449,25 @@ def test_several_films_are_the_realizations_of_their_radius(films):
     assert ds.attrs["softcell_videos"] == '["cell1.mkv", "cell0.mkv", "cell1.mkv"]'
 
 
+def test_films_at_two_radii_are_two_points_each_numbering_its_own(films, tmp_path):
+    import json
+
+    from softcell.fit.measure import film_request
+    from softcell.io.netcdf import open_dataset, open_inputs, write_dataset
+
+    _, tracked = films
+    other = open_dataset(tracked[0]).load()
+    other.attrs["softcell_parameters"] = json.dumps({"radius": 6.0})
+    other = other.isel(time=slice(0, 61))  # a shorter film: 2 s
+    moved = write_dataset(other, tmp_path / "tracked_r6.nc")
+    ds = open_inputs([tracked[0], moved, tracked[1]])
+    assert ds["radius"].values.tolist() == [5.0, 6.0]
+    assert ds["realization"].values.tolist() == [0, 1]
+    base, measure = film_request(ds, None, camera=None, warmup=15, options={})
+    assert base.parameters["radius"] == [5.0, 6.0] and measure.radii == (5.0, 6.0)
+    np.testing.assert_allclose(measure.spans, [[4.0, 4.0], [2.0, np.nan]])
+
+
 def test_films_ask_for_their_radius_length_and_frame_rate(films):
     from softcell.fit.measure import film_request
     from softcell.io.netcdf import open_inputs

@@ -108,6 +108,8 @@ class Filmed:
             mine = []
             for simulation in sorted(Path(folder).glob("point*_realization*.nc")):
                 point, realization = (int(g) for g in _NAME.search(simulation.name).groups())
+                if not np.isfinite(self.spans[point, realization]):
+                    continue  # the data have no such film (fewer at this radius)
                 target = Path(f"{folder}_films") / simulation.name
                 made = self.made(point, realization, root)
                 mine.append(target)
