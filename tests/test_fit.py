@@ -574,6 +574,22 @@ def test_a_film_fit_run_again_films_nothing_again_and_draws_the_same_posterior(f
     assert not any("filming" in line for line in lines)
     assert [f.stat().st_mtime_ns for f in films_made] == stamps and len(stamps) == 4
     np.testing.assert_array_equal(xr.open_dataset(again)["bending_stiffness"].values, first)
+    # The films remade on a cluster reached through its scheduler's address (loopback), as
+    # a remote one would be: the same films, the same posterior.
+    from distributed import LocalCluster
+
+    tracks = {f: xr.open_dataset(f)["cell_x"].values for f in films_made}
+    for f in films_made:
+        f.unlink()
+    kwargs["workers"] = None
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:  # fmt: skip
+        address = cluster.scheduler_address
+        third = fit(tracked, ["bending_stiffness=0.1:0.4"], tmp_path / "fit.nc",
+                    scheduler=address, overwrite=True, log=None, **kwargs)  # fmt: skip
+    for f, cell_x in tracks.items():
+        np.testing.assert_array_equal(xr.open_dataset(f)["cell_x"].values, cell_x)
+    np.testing.assert_array_equal(xr.open_dataset(third)["bending_stiffness"].values, first)
 
 
 # -- the paper's picture as a target ------------------------------------------------------
