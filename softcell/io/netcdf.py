@@ -460,9 +460,16 @@ def combine_sweep(parts: list[xr.Dataset], names: list[str] | None = None) -> xr
         merged[key] = sorted({v[key] for v in values})
     combined.attrs["softcell_parameters"] = json.dumps(merged)
     combined.attrs["softcell_swept_parameters"] = " ".join(swept)
-    if all("softcell_video" in ds.attrs for ds in parts):
-        combined.attrs["softcell_videos"] = json.dumps([ds.attrs["softcell_video"] for ds in parts])
+    combined.attrs.update(_videos(parts))
     return combined
+
+
+def _videos(parts: list[xr.Dataset]) -> dict[str, str]:
+    """``softcell_videos``: the tracked films' names in the order given, when every part is
+    a film (each part's own ``softcell_video`` conflicts, and is dropped)."""
+    if not all("softcell_video" in ds.attrs for ds in parts):
+        return {}
+    return {"softcell_videos": json.dumps([ds.attrs["softcell_video"] for ds in parts])}
 
 
 def _numbered_films(parts: list[xr.Dataset], values: list[dict[str, Any]]) -> list[xr.Dataset]:
