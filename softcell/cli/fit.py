@@ -54,10 +54,13 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
         default=32,
         metavar="N",
         help="design points, a power of two (default 32); each runs as many realizations "
-        "as the data has",
+        "as the data has (with --paper: the quick design)",
     )
     p.add_argument(
-        "--discard", type=float, metavar="SECONDS", help="seconds the analysis drops first"
+        "--discard",
+        type=float,
+        metavar="SECONDS",
+        help="seconds the analysis drops first (default: 15 for simulations, 0 for films)",
     )
     films = p.add_argument_group("films", "how the fit films its simulations, for tracked data")
     films.add_argument(
@@ -95,7 +98,10 @@ def _add_fit(p: argparse.ArgumentParser) -> None:
     flags.output(p, "the fit's file (.nc); its simulations go to <name>_design/")
     flags.overwrite(p, "replace an existing file that is not a softcell fit")
     flags.seed(
-        p, "the fit's root seed (default: the data's seed + 1; never the data's)", default=None
+        p,
+        "the fit's root seed (default: the data's seed + 1, never the data's; 1 for films, 0 "
+        "with --paper)",
+        default=None,
     )
     flags.workers(p, "local worker processes (default: every core)", scheduler=True)
     flags.quiet(p)
