@@ -152,26 +152,18 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 def _cmd_search(args: argparse.Namespace, config, table) -> int:
     """``softcell fit --paper``: the paper's findings across a design of the unknowns."""
-    from softcell.components.registry import default_registry
     from softcell.errors import ConfigError
-    from softcell.fit.fitting import check_distinct
     from softcell.fit.picture import search
-    from softcell.fit.priors import parse_prior, priors_from_table
-    from softcell.model.configuration import RunConfig
-    from softcell.model.parameters import MODEL_PARAMETERS
 
     if args.data:
         raise ConfigError(f"--paper takes no data: {args.data[0]} given")
     for flag in ("statistics", "discard", "camera_scale", "camera_noise", "camera_blur"):
         if getattr(args, flag) is not None:
             raise ConfigError(f"--{flag.replace('_', '-')} is for data, not --paper")
-    base = config or RunConfig()
-    specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
-    priors = [parse_prior(text, specs) for text in args.prior] + priors_from_table(table, specs)
-    check_distinct(priors)
     out = search(
-        priors,
+        args.prior,
         args.output,
+        prior_table=table,
         points=args.simulations,
         config=config,
         seed=0 if args.seed is None else args.seed,

@@ -19,7 +19,7 @@ import numpy as np
 
 from softcell.errors import ConfigError
 from softcell.fit.measure import WARMUP
-from softcell.fit.priors import Prior, parse_prior, priors_from_table
+from softcell.fit.priors import Prior, resolve_priors
 from softcell.fit.statistics import DEFAULT_STATISTICS, check_statistics, observed
 from softcell.model.configuration import RunConfig
 from softcell.video.film import Camera
@@ -133,13 +133,11 @@ def fit(
         cannot read.
     """
     from softcell.analysis import analyze
-    from softcell.components.registry import default_registry
     from softcell.fit.check import corner_figure, predictive_check
     from softcell.fit.design import run_design, space_filling
     from softcell.fit.inference import fit_emulator, sample_posterior
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
-    from softcell.model.parameters import MODEL_PARAMETERS
 
     say = log or (lambda _: None)
     paths = [Path(data)] if isinstance(data, (str, Path)) else [Path(d) for d in data]
@@ -154,10 +152,7 @@ def fit(
             f"the data was simulated from seed {data_seed}: the fit's simulations must draw "
             "other random numbers; pass another --seed"
         )
-    specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(base.components)}
-    priors = [p if isinstance(p, Prior) else parse_prior(p, specs) for p in priors]
-    priors += priors_from_table(prior_table or {}, specs)
-    check_distinct(priors)
+    priors = resolve_priors(priors, prior_table, base.components)
     statistics = check_statistics(DEFAULT_STATISTICS if statistics is None else statistics)
     values = space_filling(priors, simulations, seed)
     seen = observed(analyze(ds, measure.options), statistics)
@@ -210,14 +205,6 @@ def _request(ds, config, camera, warmup, discard):
             )
     base, data_seed = data_request(ds)
     return base, data_seed, Direct({} if discard is None else {"discard": float(discard)})
-
-
-def check_distinct(priors: Sequence[Prior]) -> None:
-    """Refuse an unknown given two priors."""
-    names = [p.name for p in priors]
-    for name in names:
-        if names.count(name) > 1:
-            raise ConfigError(f"the prior of {name} is given {names.count(name)} times: give one")
 
 
 def _check_draws(value: object) -> None:

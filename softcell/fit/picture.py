@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from softcell.errors import ConfigError
-from softcell.fit.priors import Prior
+from softcell.fit.priors import Prior, resolve_priors
 from softcell.model.configuration import RunConfig
 from softcell.paper.findings import VERDICTS
 from softcell.paper.reproduce import QUICK, Design
@@ -86,9 +86,10 @@ def tensions(topics: Sequence[str], matrix: np.ndarray) -> list[dict[str, Any]]:
 
 
 def search(
-    priors: Sequence[Prior],
+    priors: Sequence[str | Prior],
     out: str | Path,
     *,
+    prior_table: dict[str, Any] | None = None,
     points: int = 16,
     config: RunConfig | None = None,
     design: Design = SEARCH_DESIGN,
@@ -104,11 +105,14 @@ def search(
 
     Parameters
     ----------
-    priors : sequence of Prior
-        The unknowns and their ranges.
+    priors : sequence of str or Prior
+        The unknowns and their ranges: ``NAME=LOW:HIGH [UNIT]`` (see
+        :func:`~softcell.fit.priors.parse_prior`).
     out : path-like
         The search's file (NetCDF); the points' reproductions go to ``<out>_points/``, a
         page of the verdicts to ``out`` with the suffix ``.md``.
+    prior_table : dict, optional
+        More unknowns, as a ``[priors]`` table (:func:`~softcell.fit.priors.priors_from_table`).
     points : int
         Design points (a power of two).
     config : RunConfig, optional
@@ -130,16 +134,17 @@ def search(
     Raises
     ------
     ConfigError
-        For no prior, a design size that is not a power of two, or a parameter the design
-        sets for every point (the radius, the duration).
+        For a bad or repeated prior, none, a design size that is not a power of two, or a
+        parameter the design sets for every point (the radius, the duration).
     """
     from softcell.fit.design import space_filling
     from softcell.io.files import check_output
     from softcell.studies.variants import Variant, run_variants
 
-    out = check_output(Path(out), "fit", overwrite=overwrite)
-    values = space_filling(list(priors), points, seed)
     shared = config or RunConfig()
+    priors = resolve_priors(priors, prior_table, shared.components)
+    out = check_output(Path(out), "fit", overwrite=overwrite)
+    values = space_filling(priors, points, seed)
     for p in priors:
         if p.name in ("radius", "duration"):
             raise ConfigError(f"the paper's design sets {p.name} at every point: not an unknown")

@@ -11,7 +11,7 @@ unit = "..", scale = "log"}``).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -185,3 +185,30 @@ def priors_from_table(table: Mapping[str, Any], specs: Mapping[str, ParameterSpe
             )
         )
     return priors
+
+
+def resolve_priors(
+    priors: Sequence[str | Prior],
+    table: Mapping[str, Any] | None,
+    components: Mapping[str, Any],
+) -> list[Prior]:
+    """The unknowns of a run of ``components``: ``--prior`` texts (or Priors) and a
+    ``[priors]`` table, each checked against the parameters those components declare.
+
+    Raises
+    ------
+    ConfigError
+        For a prior :func:`parse_prior` or :func:`priors_from_table` refuses, or an unknown
+        given twice.
+    """
+    from softcell.components.registry import default_registry
+    from softcell.model.parameters import MODEL_PARAMETERS
+
+    specs = {**MODEL_PARAMETERS, **default_registry().parameter_specs(components)}
+    found = [p if isinstance(p, Prior) else parse_prior(p, specs) for p in priors]
+    found += priors_from_table(table or {}, specs)
+    names = [p.name for p in found]
+    for name in names:
+        if names.count(name) > 1:
+            raise ConfigError(f"the prior of {name} is given {names.count(name)} times: give one")
+    return found
