@@ -64,6 +64,14 @@ def _add_reproduce(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="the paper's design: 25 realizations of 900/1800 s per radius",
     )
+    p.add_argument(
+        "--config",
+        type=Path,
+        metavar="TOML",
+        help="model parameters ([parameters]) and components ([components]) other than the "
+        "defaults, e.g. a point `softcell fit --paper` found; the design sets the radii and "
+        "durations",
+    )
     flags.output(p, "results directory")
     flags.overwrite(
         p,
@@ -79,9 +87,12 @@ def _add_reproduce(p: argparse.ArgumentParser) -> None:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from softcell.paper.reproduce import DESIGNS, reproduce
 
+    design = DESIGNS["full" if args.full else "quick"]
+    if args.config is not None:
+        design = _configured(design, args.config)
     outcome = reproduce(
         args.output,
-        DESIGNS["full" if args.full else "quick"],
+        design,
         seed=args.seed,
         workers=args.workers,
         scheduler=args.scheduler,
@@ -90,6 +101,31 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     )
     print(f"done in {sum(outcome.steps.values()):.0f} s: {outcome.report}")
     return 0
+
+
+def _configured(design, path: Path):
+    """``design`` with the parameters and components of the TOML file ``path``."""
+    from dataclasses import replace
+
+    from softcell.io.config_file import load_config
+
+    config = load_config(path)
+    other = {"run": config.run, "analysis": config.analysis, "assembly": config.assembly,
+             "obstacles": config.parameters.get("obstacles")}  # fmt: skip
+    for table, value in other.items():
+        if value:
+            raise SoftcellError(
+                f"{path}: reproduce takes [parameters] and [components], not [{table}]: "
+                "the paper's design is one cell in its ring, analysed as the paper did"
+            )
+    for name in ("radius", "duration"):
+        if name in config.parameters:
+            raise SoftcellError(f"{path}: the design sets {name} (--quick or --full), not the file")
+    return replace(
+        design,
+        components={**design.components, **config.components},
+        parameters={**design.parameters, **config.parameters},
+    )
 
 
 def _add_calibrate(p: argparse.ArgumentParser) -> None:
