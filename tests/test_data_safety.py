@@ -199,7 +199,7 @@ BAD = [
     (["render", "W/trunc.nc", "-o", "W/out.mkv"], ["truncated or corrupt"]),
     (
         ["render", "W/novar.nc", "-o", "W/out.mkv"],
-        ["novar.nc cannot be rendered", "bot_angle: missing"],
+        ["novar.nc: it does not follow the simulation schema", "bot_angle: missing"],
     ),
     (["render", "W/sim", "-o", "W/out.mkv"], ["sweep over radius", "radius=INDEX"]),
     (

@@ -284,6 +284,104 @@ def test_the_checksum_is_no_attribute_of_the_data(one_run, tmp_path):
     assert (tmp_path / "again.nc").read_bytes() == clean
 
 
+def flip_one_time_bit(path: Path) -> None:
+    """One bit of one sample time flipped in place (the time axis is stored uncompressed)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "r+") as nc:
+        value = np.array(nc["time"][2], dtype=np.float64)
+        nc["time"][2] = (value.view(np.uint64) ^ np.uint64(1 << 40)).view(np.float64)
+
+
+def move_the_cell(path: Path) -> None:
+    """``cell_x`` edited by +1000 cm, the checksum left as it was."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "r+") as nc:
+        nc["cell_x"][...] = nc["cell_x"][...] + 1000.0
+
+
+def rewritten(path: Path, change) -> None:
+    """``path`` read, changed by ``change`` and written again by softcell (a fresh checksum)."""
+    from softcell.io.netcdf import read_dataset, write_dataset
+
+    ds = change(read_dataset(path))
+    path.unlink()
+    write_dataset(ds, path)
+
+
+def newer_version(path: Path) -> None:
+    rewritten(path, lambda ds: ds.assign_attrs(softcell_version="999"))
+
+
+def no_cell(path: Path) -> None:
+    rewritten(path, lambda ds: ds.assign(cell_x=ds["cell_x"] * np.nan))
+
+
+def dropped_variable(path: Path) -> None:
+    rewritten(path, lambda ds: ds.drop_vars("bot_angle"))
+
+
+READERS = {
+    "analyze": lambda out, tmp: ["analyze", str(out), "--discard", "0.05", "--quiet",
+                                 "-o", str(tmp / "an.nc")],
+    "export": lambda out, tmp: ["export", str(out), "-o", str(tmp / "poses.nc")],
+    "animate": lambda out, tmp: ["animate", str(out), "--quiet", "-o", str(tmp / "film.gif")],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("reader", sorted(READERS))
+@pytest.mark.parametrize(
+    ("harm", "words"),
+    [
+        (flip_one_time_bit, "its contents do not match their checksum"),
+        (move_the_cell, "its contents do not match their checksum"),
+        (newer_version, "softcell 999 wrote it, newer than this softcell"),
+        (no_cell, "cell_x holds no value (all NaN)"),
+        (dropped_variable, "it does not follow the simulation schema (bot_angle: missing)"),
+    ],
+)
+def test_readers_check_what_they_read(one_run, tmp_path, capsys, reader, harm, words):
+    out, path, _ = one_run
+    harm(path)
+    line = one_line_exit_2(READERS[reader](out, tmp_path), capsys)
+    assert line.startswith(f"softcell: error: {path}: {words}"), line
+    assert "recompute it" in line, line
+    assert not any(p.name.startswith(("an.", "poses.", "film.")) for p in tmp_path.iterdir())
+
+
+def test_no_verify_reads_a_file_as_it_is(one_run, tmp_path):
+    import xarray as xr
+
+    out, path, _ = one_run
+    move_the_cell(path)
+    assert main([*READERS["export"](out, tmp_path), "--no-verify"]) == 0
+    with xr.open_dataset(tmp_path / "poses.nc") as poses:
+        assert float(poses["position"].max()) > 900.0  # the edited cell, as it is
+
+
+def test_a_rerun_names_the_checksum_of_a_damaged_time_axis(one_run, capsys):
+    out, path, clean = one_run
+    flip_one_time_bit(path)
+    argv = ["simulate", "--radius", "4", "--duration", "0.2", *COARSE, "-o", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "do not match their checksum" in err and "incomplete" not in err, err
+    assert path.read_bytes() == clean
+
+
+@pytest.mark.parametrize("reader", sorted(READERS))
+def test_readers_refuse_a_folder_being_written(one_run, tmp_path, capsys, reader):
+    from softcell.io.files import folder_lock
+
+    out, _, _ = one_run
+    with folder_lock(out, "softcell simulate"):
+        line = one_line_exit_2(READERS[reader](out, tmp_path), capsys)
+    assert f"{out} is being written by softcell simulate (pid {os.getpid()}" in line, line
+    assert "wait for it to end" in line, line
+    assert main(READERS[reader](out, tmp_path)) == 0  # once it ends, the folder reads
+
+
 # -- one writer per output folder; signals; renders that cannot end ------------------------
 
 

@@ -1,6 +1,7 @@
 """softcell reproduce: a small design end to end, the figures, the report and its verdicts."""
 
 import json
+import re
 from html.parser import HTMLParser
 
 import numpy as np
@@ -218,3 +219,26 @@ def test_bad_requests_are_refused_with_the_value(tmp_path):
             log=None,
         )
     assert main(["reproduce", "--quick", "--workers", "0", "-o", str(tmp_path)]) == 2
+
+
+@pytest.mark.parametrize(
+    ("toml", "message"),
+    [
+        ("[parameters]\nbending_stiffness = -1.0\n", "bending_stiffness"),
+        ('[components]\ndriving_protocol = "pivot_run_and_tumbel"\n', "pivot_run_and_tumbel"),
+        ("[parameters]\nradius = 5.0\n", "the design sets radius"),
+        ("[run]\nrealizations = 2\n", r"not \[run\]"),
+        ("[assembly]\ncells = 4\n", r"not \[assembly\]"),
+    ],
+)
+def test_reproduce_at_other_parameters_refuses_a_bad_file_before_running(
+    tmp_path, capsys, toml, message
+):
+    config = tmp_path / "point.toml"
+    config.write_text(toml, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["reproduce", "--quick", "--config", str(config), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert re.search(message, err), err
+    assert len(err.strip().splitlines()) == 1
+    assert not (out / "simulations").exists()

@@ -24,6 +24,7 @@ def _add_analyze(p: argparse.ArgumentParser) -> None:
     )
     flags.output(p, "analysis file (.nc)")
     flags.overwrite(p, "replace an existing file that is not a softcell analysis")
+    flags.no_verify(p)
     flags.quiet(p)
     p.add_argument(
         "--config",
@@ -78,7 +79,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         if k.startswith("param_") and v is not None
     )
     check_output(args.output, "analysis", inputs=args.inputs, overwrite=args.overwrite)
-    ds = open_inputs(args.inputs, chunks={})  # one point in memory at a time
+    ds = open_inputs(args.inputs, chunks={}, verify=args.verify)  # one point at a time
     try:
         result = analyze(ds, options, progress=not args.quiet)
     except (OSError, RuntimeError) as exc:  # netCDF's "HDF error" names no file

@@ -87,6 +87,17 @@ def quiet(p: argparse.ArgumentParser, help: str = "no progress bar") -> None:
     p.add_argument("--quiet", action="store_true", help=help)
 
 
+def no_verify(p: argparse.ArgumentParser) -> None:
+    """``--no-verify``: read the inputs without checking them against their checksums."""
+    p.add_argument(
+        "--no-verify",
+        dest="verify",
+        action="store_false",
+        help="skip checking each input against its checksum, version and schema (faster "
+        "by about one reading of the files; for trusted scratch files)",
+    )
+
+
 def seed(p: argparse.ArgumentParser, help: str, default: int | None = 0) -> None:
     """``--seed``: the root seed every random stream of the run derives from."""
     p.add_argument("--seed", type=int, default=default, help=help)

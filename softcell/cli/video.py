@@ -30,6 +30,7 @@ def _add_render(p: argparse.ArgumentParser) -> None:
     )
     flags.seed(p, "seed of the noise")
     p.add_argument("--no-head-mark", action="store_true", help="no mark at the bot's head")
+    flags.no_verify(p)
     flags.quiet(p)
     p.set_defaults(func=_cmd_render)
 
@@ -43,7 +44,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 
     check_seed(args.seed)  # before anything is read
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
-    ds = open_inputs([args.input])
+    ds = open_inputs([args.input], verify=args.verify)
     point = parse_point(args.point, "--point") if args.point else {}
     size = parse_size(args.size, "--size") if args.size else None
     try:
@@ -228,6 +229,7 @@ def _add_animate(p: argparse.ArgumentParser) -> None:
         default=20,
         help="H.264 quality: 0 lossless .. 51 smallest (default 20; 28 for the web)",
     )
+    flags.no_verify(p)
     flags.quiet(p)
     p.set_defaults(func=_cmd_animate)
 
@@ -247,7 +249,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
             raise SoftcellError(
                 f"--realizations {args.realizations} is not allowed: must be indices, e.g. 0,1"
             ) from None
-    ds = open_inputs([args.input])
+    ds = open_inputs([args.input], verify=args.verify)
     if args.point:
         ds = ds.isel(parse_point(args.point, "--point"))
     movie = animate(
@@ -288,6 +290,7 @@ def _add_export(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--every", type=int, default=1, help="gsd: write every N-th stored sample (default 1)"
     )
+    flags.no_verify(p)
     p.set_defaults(func=_cmd_export)
 
 
@@ -317,7 +320,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     if to == "gsd":
         check_gsd_path(args.output)
     check_output(args.output, "export", inputs=[args.input], overwrite=args.overwrite)
-    with open_inputs([args.input]) as ds:
+    with open_inputs([args.input], verify=args.verify) as ds:
         if to == "gsd":
             done = to_gsd(ds, args.output, realization=args.realization, every=args.every)
         else:

@@ -423,6 +423,28 @@ def folder_lock(directory: str | os.PathLike[str], command: str) -> Iterator[Pat
         os.close(fd)
 
 
+def folder_in_use(directory: str | os.PathLike[str]) -> str | None:
+    """Who is writing ``directory`` now (see :func:`folder_lock`), or None when nobody is.
+
+    A reader asks before it reads a folder: while a command writes there, the folder holds
+    only part of what it will.
+    """
+    lock = Path(directory) / LOCK_FILE
+    try:
+        fd = os.open(lock, os.O_RDONLY)
+    except OSError:
+        return None  # no lock file: nobody writes there
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError as exc:
+        if exc.errno in (errno.EACCES, errno.EAGAIN):
+            return _holder(lock)
+        return None  # a file system that cannot lock: folder_lock refuses to write there
+    finally:
+        os.close(fd)  # closing releases a shared lock we took
+    return None
+
+
 def remove(paths: Iterable[str | os.PathLike[str]]) -> None:
     """Delete files and directories (``--overwrite`` of stale outputs)."""
     for path in map(Path, paths):

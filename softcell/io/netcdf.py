@@ -26,7 +26,7 @@ import xarray as xr
 
 import softcell.analysis.accessor  # noqa: F401  (registers ds.softcell)
 from softcell.errors import ConfigError, SoftcellError
-from softcell.io.files import atomic_write, no_input
+from softcell.io.files import atomic_write, folder_in_use, no_input
 from softcell.model.parameters import MODEL_PARAMETERS, ParameterSpec
 
 #: Keyword arguments that keep simulated time as plain seconds.
@@ -135,9 +135,7 @@ def read_failure(paths: list[str | os.PathLike[str]], exc: BaseException) -> Bas
     for path in input_files(paths):
         why = data_problem(path)
         if why:
-            return SoftcellError(
-                f"{path}: {why}; recompute it (rerun the command that made it), or leave it out"
-            )
+            return SoftcellError(f"{path}: {why}; {RECOMPUTE}")
     return exc
 
 
@@ -179,19 +177,50 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     return path
 
 
-def _open(path: Path, chunks: Mapping[str, int] | None = None) -> xr.Dataset:
-    """``xr.open_dataset`` of one file, with a one-line error for what is no NetCDF file."""
+def _open(path: Path, chunks: Mapping[str, int] | None = None, verify: bool = True) -> xr.Dataset:
+    """``xr.open_dataset`` of one file, with a one-line error for what is no NetCDF file and,
+    with ``verify``, for one whose contents fail their checksum or that a newer softcell
+    wrote."""
     if path.stat().st_size == 0:
         raise SoftcellError(f"{path} is empty (0 bytes): not a NetCDF file")
     try:
         ds = xr.open_dataset(path, engine="netcdf4", chunks=chunks, **DECODE)
-        ds.attrs.pop(CHECKSUM, None)  # a storage detail, not part of the data
-        return ds
     except (OSError, RuntimeError, ValueError, KeyError) as exc:
         raise SoftcellError(
             f"cannot read {path}: not a NetCDF file, or truncated or corrupt "
             f"({type(exc).__name__}: {exc})"
         ) from None
+    ds.attrs.pop(CHECKSUM, None)  # a storage detail, not part of the data
+    why = (data_problem(path) or _version_problem(ds)) if verify else None
+    if why:
+        ds.close()
+        raise SoftcellError(f"{path}: {why}; {RECOMPUTE}")
+    return ds
+
+
+#: What a reader advises for a file it cannot trust.
+RECOMPUTE = "recompute it (rerun the command that made it), or leave it out"
+
+
+def _version_problem(ds: xr.Dataset) -> str | None:
+    """Why a file's ``softcell_version`` says this softcell cannot read it, or None."""
+    from packaging.version import InvalidVersion, Version
+
+    from softcell._version import __version__
+
+    stored = ds.attrs.get("softcell_version")
+    if stored is None:
+        return None  # not a softcell file: the schema's checks name what it lacks
+    try:
+        newer = Version(str(stored)) > Version(__version__)
+    except InvalidVersion:
+        return f"its softcell_version {stored!r} is not a version"
+    if newer:
+        return (
+            f"softcell {stored} wrote it, newer than this softcell ({__version__}), "
+            "whose reading of it is unknown: upgrade softcell"
+        )
+    return None
 
 
 #: Attribute marking the label variable that stands in for a text dimension coordinate.
@@ -227,7 +256,7 @@ def _from_cf(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
+def read_dataset(path: str | os.PathLike[str], *, verify: bool = True) -> xr.Dataset:
     """Read one NetCDF file fully into memory and close it; every variable keeps the CF
     ``units`` attribute it was written with.
 
@@ -235,11 +264,19 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     ----------
     path : path-like
         A softcell NetCDF file (simulation, tracked video or analysis).
+    verify : bool
+        Check the contents against the checksum they were written with, and that no newer
+        softcell wrote the file, first (it costs about one more reading of the file).
+
+    Raises
+    ------
+    SoftcellError
+        For a missing, unreadable or damaged file (one line naming it).
     """
     path = Path(path)
     if not path.is_file():
         raise no_input(path, "NetCDF file")
-    with _open(path) as ds:
+    with _open(path, verify=verify) as ds:
         try:
             return _from_cf(ds.load())
         except (OSError, RuntimeError, ValueError) as exc:
@@ -249,7 +286,10 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
 
 
 def open_dataset(
-    path: str | os.PathLike[str], *, chunks: Mapping[str, int] | None = None
+    path: str | os.PathLike[str],
+    *,
+    chunks: Mapping[str, int] | None = None,
+    verify: bool = True,
 ) -> xr.Dataset:
     """Open one softcell file, or a directory of files from one sweep, as one Dataset.
 
@@ -260,6 +300,10 @@ def open_dataset(
         come from one run of ``softcell simulate``.
     chunks : mapping, optional
         Dask chunks (lazy loading); by default the data are read lazily without dask.
+    verify : bool
+        Check every file first: its contents against their checksum, its softcell version,
+        and (for simulations and tracked films) the schema and that it holds positions. A
+        directory that a running command is writing is refused either way.
 
     Returns
     -------
@@ -271,13 +315,19 @@ def open_dataset(
     """
     path = Path(path)
     if path.is_file():
-        return _from_cf(_open(path, chunks))
+        return _from_cf(_open(path, chunks, verify))
     if not path.is_dir():
         raise SoftcellError(f"no such file or directory: {path}")
-    return _combine(_sweep_files(path), chunks)
+    return _combine(_sweep_files(path), chunks, verify)
 
 
 def _sweep_files(directory: Path) -> list[Path]:
+    holder = folder_in_use(directory)
+    if holder:
+        raise SoftcellError(
+            f"{directory} is being written by {holder}: it holds only part of its files; "
+            "wait for it to end"
+        )
     try:  # Path.glob says nothing of a directory it cannot read
         with os.scandir(directory) as entries:
             names = [e.name for e in entries]
@@ -289,15 +339,21 @@ def _sweep_files(directory: Path) -> list[Path]:
     return files
 
 
-def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.Dataset:
+def _combine(
+    files: list[Path], chunks: Mapping[str, int] | None = None, verify: bool = True
+) -> xr.Dataset:
     """One Dataset from the files of a sweep; analysis and export files among them are left
     out (they are results, not records)."""
     parts, names = [], []
     for f in files:
-        ds = _open(f, chunks)
+        ds = _open(f, chunks, verify)
         if ds.attrs.get("softcell_origin") in ("analysis", "export"):
             ds.close()
             continue
+        why = _record_problem(ds) if verify else None
+        if why:
+            ds.close()
+            raise SoftcellError(f"{f}: {why}; {RECOMPUTE}")
         parts.append(ds)
         names.append(str(f))
     if not parts:
@@ -306,13 +362,35 @@ def _combine(files: list[Path], chunks: Mapping[str, int] | None = None) -> xr.D
 
 
 def open_inputs(
-    paths: list[str | os.PathLike[str]], chunks: Mapping[str, int] | None = None
+    paths: list[str | os.PathLike[str]],
+    chunks: Mapping[str, int] | None = None,
+    *,
+    verify: bool = True,
 ) -> xr.Dataset:
     """Open files and directories (each a sweep, see :func:`open_dataset`) as one Dataset: a
-    single file as is, several files combined along their swept parameters. ``chunks`` as
-    for :func:`open_dataset` (``{}``: one dask chunk per file, so that an analysis holds one
-    parameter point in memory at a time)."""
-    return _combine(input_files(paths), chunks)
+    single file as is, several files combined along their swept parameters. ``chunks`` and
+    ``verify`` as for :func:`open_dataset` (``chunks={}``: one dask chunk per file, so that
+    an analysis holds one parameter point in memory at a time)."""
+    return _combine(input_files(paths), chunks, verify)
+
+
+#: The positions a simulation or a tracked film must hold somewhere (a free bot: the bot's).
+POSITIONS = ("bot_x", "bot_y", "cell_x", "cell_y")
+
+
+def _record_problem(ds: xr.Dataset) -> str | None:
+    """Why a simulation or tracking file cannot be analysed: the first way it departs from
+    the schema, or a position it holds nowhere (all NaN); None when it can."""
+    from softcell.schema import problems
+
+    found = problems(ds)
+    if found:
+        return f"it does not follow the simulation schema ({found[0]})"
+    membrane = json.loads(ds.attrs.get("softcell_components", "{}")).get("membrane", True)
+    for name in POSITIONS if membrane is not False else POSITIONS[:2]:
+        if not bool(ds[name].notnull().any()):
+            return f"{name} holds no value (all NaN)"
+    return None
 
 
 def _stored_parameters(parts: list[xr.Dataset], names: list[str]) -> list[dict[str, Any]]:

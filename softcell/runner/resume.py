@@ -56,7 +56,7 @@ def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray |
     from softcell.schema import problems
 
     try:
-        ds = open_dataset(path)  # lazily: the membrane is not read
+        ds = open_dataset(path, verify=False)  # lazily; _damage verifies the checksum
     except SoftcellError:
         raise SoftcellError("it is not a readable NetCDF file (truncated or corrupt)") from None
     with ds:
@@ -194,7 +194,8 @@ def resume_plan(tasks: list[Task], out: Path, *, overwrite: bool = False) -> Res
         wanted = task.request()
         if path.exists():
             why = _reuse_problem(path, wanted, task.params)
-            damage = _damage(path) if why is None else None
+            # A file of this request whose samples look wrong may be damaged: say which.
+            damage = _damage(path) if why is None or why.startswith("is incomplete") else None
             if why is None and damage is None:
                 resume.reused += 1
                 continue
