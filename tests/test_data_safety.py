@@ -374,6 +374,50 @@ def test_installing_a_plugin_changes_no_request(sweep, capsys):
     assert tree_hash(sweep) == before
 
 
+def test_a_plugin_whose_code_changed_is_a_changed_request(tmp_path, capsys, monkeypatch):
+    # The same plugin, the same version, one line of its code changed: the files made with
+    # the old code are not reused silently; --overwrite recomputes them.
+    import importlib
+
+    from softcell.components.registry import registered
+
+    package = tmp_path / "plugin" / "changing_plugin"
+    package.mkdir(parents=True)
+    code = (Path(__file__).parent / "fakeplugins" / "good.py").read_text(encoding="utf-8")
+    (package / "__init__.py").write_text(code, encoding="utf-8")
+    monkeypatch.syspath_prepend(str(package.parent))
+    plugin = importlib.import_module("changing_plugin")
+    config = tmp_path / "run.toml"
+    config.write_text('[components]\nstopgo_detector = "fake_hysteresis"\n', encoding="utf-8")
+    out = tmp_path / "sim"
+
+    def run(*extra):
+        with registered(plugin):
+            return main(["simulate", str(config), "--radius", "4", *SMALL, *extra, "-o", str(out)])
+
+    assert run() == 0
+    stored = json.loads(
+        xr.open_dataset(out / "point000_realization0000.nc").attrs["softcell_component_code"]
+    )
+    assert "code of stopgo_detector fake_hysteresis" in stored
+    before = tree_hash(out)
+    assert run() == 0 and tree_hash(out) == before  # the same code: every file reused
+    (package / "__init__.py").write_text(code + "# a changed line\n", encoding="utf-8")
+    capsys.readouterr()
+    assert run() == 2
+    err = capsys.readouterr().err
+    assert "code of stopgo_detector fake_hysteresis = " in err and "--overwrite" in err, err
+    assert tree_hash(out) == before
+    assert run("--overwrite") == 0
+    again = json.loads(
+        xr.open_dataset(out / "point000_realization0000.nc").attrs["softcell_component_code"]
+    )
+    assert (
+        again["code of stopgo_detector fake_hysteresis"]
+        != (stored["code of stopgo_detector fake_hysteresis"])
+    )
+
+
 def test_a_file_that_stored_every_installed_components_parameters_is_reused(sweep, capsys):
     # softcell 0.2.0 stored the parameters of every registered component, used or not.
     for path in sweep.glob("*.nc"):

@@ -291,7 +291,7 @@ class Registry:
             the other kinds one name each): only these components' parameters. None: every
             registered component's.
         """
-        return merge_specs(*(r.component.parameters for r in self._in_use(components)))
+        return merge_specs(*(r.component.parameters for r in self.in_use(components)))
 
     def parameters(
         self, values: Mapping[str, Any] | None = None, components: Mapping[str, Any] | None = None
@@ -329,7 +329,9 @@ class Registry:
                 return f"{kind_name(entry.component.kind)} {entry.component.name!r}"
         return None
 
-    def _in_use(self, components: Mapping[str, Any] | None) -> list[Registered]:
+    def in_use(self, components: Mapping[str, Any] | None) -> list[Registered]:
+        """The registered components that ``components`` (names by kind, ``energy_terms``
+        and ``pair_terms`` lists) names; None: every one."""
         if components is None:
             return list(self)
         return [r for r in self if chosen(r.component, components)]

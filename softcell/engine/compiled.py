@@ -102,6 +102,17 @@ def _hash_files(stamps: tuple[tuple[str, int, int], ...]) -> str:
     return digest.hexdigest()
 
 
+def code_digest(obj: object) -> str:
+    """The first 16 hex digits of :func:`package_hash` of the package that defines ``obj``
+    (a component class), or ``"unidentified (REASON)"`` when that package has no source
+    files (a class typed in a notebook)."""
+    top = str(getattr(obj, "__module__", "")).partition(".")[0]
+    try:
+        return package_hash(top)[:16]
+    except NotCacheable as reason:
+        return f"unidentified ({reason})"
+
+
 @functools.cache
 def _distribution_version(top: str) -> str:
     """The version of ``top``: its distribution's of the same name, else its ``__version__``

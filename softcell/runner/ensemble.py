@@ -31,7 +31,7 @@ from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
 from softcell.runner.resume import expected_bytes, resume_plan
-from softcell.runner.tasks import STOP_FILE, Task, run_task, stored_components
+from softcell.runner.tasks import STOP_FILE, Task, component_code, run_task, stored_components
 from softcell.settings import CHECKPOINT_EVERY
 
 
@@ -102,6 +102,7 @@ def plan(
     )
     settings = assembly.as_dict() if assembly is not None else None
     stored = stored_components(dict(config.components), membrane, registry, settings)
+    code = component_code(stored, registry)
     return [
         Task(
             point=p,
@@ -114,6 +115,7 @@ def plan(
             path=str(out / f"point{p:03d}_realization{r:04d}.nc"),
             swept=swept,
             assembly=settings,
+            code=code,
         )
         for p, (_, params) in enumerate(points)
         for r in range(realizations)

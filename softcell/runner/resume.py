@@ -20,7 +20,14 @@ from softcell.engine import fine_times, sample_times
 from softcell.errors import SoftcellError
 from softcell.model.limits import file_bytes
 from softcell.model.parameters import Parameters
-from softcell.runner.tasks import Task, checkpoint_path, read_checkpoint, request_of
+from softcell.runner.tasks import (
+    CODE_ATTR,
+    CODE_KEY,
+    Task,
+    checkpoint_path,
+    read_checkpoint,
+    request_of,
+)
 
 
 def _shown(value: Any) -> str:
@@ -33,8 +40,11 @@ def first_mismatch(made: dict[str, Any], wanted: dict[str, Any]) -> str | None:
 
     A parameter stored in ``made`` that ``wanted`` lacks is no difference: the request holds
     every parameter of the components it uses, and softcell 0.2.0 also stored those of every
-    installed component (used or not), which must not make its files unusable.
+    installed component (used or not), which must not make its files unusable. Nor does the
+    components' code (``"code of KIND NAME"``) in a file made before it was recorded.
     """
+    if not any(k.startswith(CODE_KEY) for k in made):
+        wanted = {k: v for k, v in wanted.items() if not k.startswith(CODE_KEY)}
     extra = (k for k in made if k not in wanted and not k.startswith("parameter "))
     for key in [*wanted, *extra]:
         there, here = made.get(key, "(none)"), wanted.get(key, "(none)")
@@ -71,6 +81,7 @@ def stored_request(path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray |
                 int(a["softcell_seed"]),
                 str(a.get("softcell_spawn_key")),
                 a.get("softcell_version"),
+                json.loads(a.get(CODE_ATTR, "{}")),
             ),
             np.asarray(ds["time"].values),
             (np.asarray(ds["fine_time"].values) if "fine_time" in ds.coords else None),

@@ -29,6 +29,12 @@ from softcell.io.files import atomic_write
 from softcell.model.parameters import Parameters
 from softcell.settings import CHECKPOINT_EVERY
 
+#: The attribute of a simulation file holding :attr:`Task.code` (JSON).
+CODE_ATTR = "softcell_component_code"
+
+#: How a request names each component's code: ``"code of KIND NAME"``.
+CODE_KEY = "code of "
+
 #: A file in the output directory asking the realizations running on a cluster to save a
 #: checkpoint and stop (what Ctrl-C does to this process; see
 #: :func:`softcell.runner.cluster.run_on_cluster`).
@@ -58,6 +64,10 @@ class Task:
         Its file.
     swept : tuple of str
         Parameters stored as scalar coordinates too.
+    code : dict
+        Each component in use (``"code of KIND NAME"``): where it came from (its
+        distribution and version) and a digest of its package's code
+        (:func:`component_code`). A file made with other code is another request.
     assembly : dict, optional
         Many cells (:meth:`softcell.model.assembly.Assembly.as_dict`); None for one cell.
     """
@@ -72,6 +82,7 @@ class Task:
     path: str
     swept: tuple[str, ...] = field(default=("radius",))
     assembly: dict[str, Any] | None = None
+    code: dict[str, str] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -92,7 +103,23 @@ class Task:
             self.seed,
             f"{self.point},{self.realization}",
             __version__,
+            self.code,
         )
+
+
+def component_code(components: dict[str, Any], registry: Registry) -> dict[str, str]:
+    """Each component ``components`` names, as ``{"code of KIND NAME": "ORIGIN, code
+    DIGEST"}``: its origin (a distribution and its version, or softcell's built-in
+    module) and :func:`softcell.engine.compiled.code_digest` of its package, so that a
+    plugin whose code changed (even under the same version) makes another request."""
+    from softcell.engine.compiled import code_digest
+
+    return {
+        f"{CODE_KEY}{r.component.kind} {r.component.name}": (
+            f"{r.origin}, code {code_digest(r.component)}"
+        )
+        for r in registry.in_use(components)
+    }
 
 
 def stored_components(
@@ -118,12 +145,16 @@ def request_of(
     seed: Any,
     spawn_key: Any,
     version: Any,
+    code: dict[str, str] | None = None,
 ) -> dict[str, Any]:
     """A request as compared between runs: ``"parameter NAME"`` for each parameter, then
-    ``"component KIND"``, ``"seed"``, ``"spawn key"``, ``"softcell version"``."""
+    ``"component KIND"``, ``"code of KIND NAME"`` (see :func:`component_code`; a file made
+    before softcell recorded it has none), ``"seed"``, ``"spawn key"``, ``"softcell
+    version"``."""
     return {
         **{f"parameter {k}": v for k, v in parameters.items()},
         **{f"component {k}": v for k, v in sorted(components.items())},
+        **dict(sorted((code or {}).items())),
         "seed": seed,
         "spawn key": spawn_key,
         "softcell version": version,
@@ -327,6 +358,7 @@ def _run_and_write(
         "extra_attrs": {
             "softcell_point": task.point,
             "softcell_spawn_key": f"{task.point},{task.realization}",
+            CODE_ATTR: json.dumps(task.code, sort_keys=True),
         },
         "scalar_coords": task.swept,
     }
