@@ -364,3 +364,42 @@ def test_the_kernels_entry_is_named_by_the_code(tmp_path, monkeypatch):
     assert entry.stale
     monkeypatch.setattr(model_cache, "_kernel_code", lambda: "f" * 20)
     assert model_cache.kernel_entry(cache) != old
+
+
+def _flip_one_byte(path: Path, at: float) -> None:
+    data = bytearray(path.read_bytes())
+    data[int(len(data) * at)] ^= 0x10
+    path.write_bytes(bytes(data))
+
+
+def test_a_damaged_kernel_cache_file_is_reported_and_compiled_again(tmp_path):
+    # Before: one changed byte in the object code of a kernel's .nbc unpickled fine and the
+    # process died of an illegal instruction (exit 132); `softcell cache` saw nothing wrong.
+    cache = tmp_path / "cache"
+    code = (
+        "import numpy as np\n"
+        "from softcell.engine.kernels.runs import run_lengths\n"
+        "print(run_lengths(np.array([1, 1, 0, 1, 1, 1], dtype=np.int8),"
+        " np.zeros(6, dtype=np.int64)))\n"
+    )
+    env = {**os.environ, "SOFTCELL_CACHE_DIR": str(cache)}
+
+    def run():
+        return subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300
+        )
+
+    first = run()
+    assert first.returncode == 0, first.stderr
+    (data,) = model_cache.kernel_entry(cache).glob("engine/kernels/runs.run_lengths-*.nbc")
+    _flip_one_byte(data, 0.02)
+    (entry,) = model_cache.entries(cache)
+    assert "run_lengths" in entry.damaged and "sha256" in entry.damaged
+    again = run()
+    assert again.returncode == 0, again.stderr
+    assert again.stdout == first.stdout
+    assert "CacheWarning" in again.stderr and "does not match its sha256" in again.stderr
+    (entry,) = model_cache.entries(cache)
+    assert not entry.damaged  # compiled again and rewritten
+    _flip_one_byte(data, 0.5)
+    assert model_cache.clear(cache, stale_only=True) == 1

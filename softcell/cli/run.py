@@ -215,7 +215,7 @@ def _add_cache(p: argparse.ArgumentParser) -> None:
         "--stale",
         action="store_true",
         help="with clear: only the entries another softcell build or numba, numpy "
-        "or Python version made (never read again)",
+        "or Python version made (never read again), and the damaged ones",
     )
     p.set_defaults(func=_cmd_cache)
 
@@ -239,10 +239,12 @@ def _cmd_cache(args: argparse.Namespace) -> int:
     )
     print(f"location: {root}  (from {source})")
     stale = sum(e.stale for e in found)
+    damaged = sum(bool(e.damaged) for e in found)
     print(
         f"size: {total / 2**20:.1f} MiB in {len(found)} entries ({stale} stale: made by "
-        "another softcell build or numba, numpy, Python version; 'softcell cache clear "
-        "--stale' removes them)"
+        f"another softcell build or numba, numpy, Python version; {damaged} damaged: a file "
+        "does not match its checksum, rebuilt when next used; 'softcell cache clear "
+        "--stale' removes both)"
     )
     strangers = compiled.foreign(root)
     if strangers:
@@ -251,7 +253,9 @@ def _cmd_cache(args: argparse.Namespace) -> int:
             f"(e.g. {strangers[0].name}); 'cache clear' refuses this folder"
         )
     for entry in found:
-        mark = "  stale" if entry.stale else ""
+        mark = ("  stale" if entry.stale else "") + (
+            f"  damaged ({entry.damaged})" if entry.damaged else ""
+        )
         print(
             f"    {entry.name}  {entry.size / 2**10:.0f} KiB  {entry.created}{mark}  "
             f"{entry.description}"

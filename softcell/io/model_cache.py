@@ -64,6 +64,7 @@ class Entry:
     created: str
     size: int  # bytes, numba's files included
     stale: bool  # made by another softcell build or numba, numpy, Python version
+    damaged: str = ""  # what is wrong with one of its files (rebuilt when next used)
 
     @property
     def name(self) -> str:
@@ -119,14 +120,116 @@ def _pickle_complete(data: bytes) -> None:
             raise ValueError("truncated pickle")
 
 
-def _numba_files_ok(folder: Path) -> str | None:
-    """None if every numba cache file under ``folder`` is whole, else what is wrong."""
-    for path in sorted(folder.glob("*.nb[ic]")):
-        try:
-            _pickle_complete(path.read_bytes())
-        except Exception as error:  # any unreadable file is a corrupt entry
-            return f"{path.name}: {type(error).__name__}: {error}"
+#: Beside each of numba's cache files (``.nbi`` index, ``.nbc`` data) in this cache, a file
+#: of the same name plus this suffix holds its sha256, written with it and checked before
+#: numba reads it (:class:`_VerifiedCacheFile`): one changed byte in a compiled function's
+#: object code unpickles fine and then fails far from its cause.
+DIGEST = ".sha256"
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def numba_file_problem(path: Path) -> str | None:
+    """What is wrong with one of numba's cache files in this cache, or None: its bytes do not
+    match the digest stored beside it, or (a file written before digests were kept) they are
+    not whole pickles."""
+    try:
+        data = path.read_bytes()
+        stored = Path(f"{path}{DIGEST}")
+        if stored.exists():
+            if stored.read_text(encoding="ascii").strip() != _sha256(data):
+                return f"{path.name}: its bytes do not match their sha256"
+            return None
+        _pickle_complete(data)
+    except Exception as error:  # any unreadable file is a corrupt entry
+        return f"{path.name}: {type(error).__name__}: {error}"
     return None
+
+
+def _numba_files_ok(folder: Path) -> str | None:
+    """None if every numba cache file under ``folder`` is whole, else what is wrong with the
+    first that is not."""
+    for path in sorted(folder.rglob("*.nb[ic]")):
+        problem = numba_file_problem(path)
+        if problem is not None:
+            return problem
+    return None
+
+
+def _matches_digest(path: str) -> bool:
+    """Whether numba's cache file ``path`` matches its stored digest (False, with a warning,
+    when it does not; False, silently, when it has none: written by a process that stopped
+    between the two files, or before digests were kept)."""
+    try:
+        data = Path(path).read_bytes()
+        stored = Path(f"{path}{DIGEST}").read_text(encoding="ascii").strip()
+    except OSError:
+        return False
+    if stored == _sha256(data):
+        return True
+    warnings.warn(
+        f"softcell: numba's cache file {path} does not match its sha256 (damaged); "
+        "compiling it again",
+        CacheWarning,
+        stacklevel=4,
+    )
+    return False
+
+
+def _verified_cache_file(base: type) -> type:
+    """numba's ``IndexDataCacheFile`` (``base``), made to keep a sha256 beside each file it
+    writes in this cache and to check it before reading: a file that does not match is
+    reported (:class:`~softcell.errors.CacheWarning`) and treated as absent, so numba compiles
+    the function again and rewrites it. Files elsewhere (other projects' caches) are read and
+    written as numba does."""
+
+    class VerifiedCacheFile(base):  # type: ignore[misc, valid-type]
+        def __init__(self, cache_path, filename_base, source_stamp):
+            super().__init__(cache_path, filename_base, source_stamp)
+            try:
+                self._verified = Path(cache_path).resolve().is_relative_to(cache_dir().resolve())
+            except OSError:
+                self._verified = False
+
+        def _seal(self, path: str) -> None:
+            with self._open_for_write(f"{path}{DIGEST}") as f:
+                f.write(_sha256(Path(path).read_bytes()).encode("ascii"))
+
+        def _load_index(self):
+            if self._verified and os.path.exists(self._index_path):
+                if not _matches_digest(self._index_path):
+                    return {}
+            return super()._load_index()
+
+        def _save_index(self, overloads):
+            super()._save_index(overloads)
+            if self._verified:
+                self._seal(self._index_path)
+
+        def _load_data(self, name):
+            if self._verified and not _matches_digest(self._data_path(name)):
+                raise OSError(f"{name} is not verified")  # numba: not in the cache
+            return super()._load_data(name)
+
+        def _save_data(self, name, data):
+            super()._save_data(name, data)
+            if self._verified:
+                self._seal(self._data_path(name))
+
+    VerifiedCacheFile.__qualname__ = VerifiedCacheFile.__name__ = "VerifiedCacheFile"
+    return VerifiedCacheFile
+
+
+@functools.cache
+def _verify_numba_files() -> None:
+    """Have numba keep and check a digest of each of its cache files in this cache (numba
+    offers no public hook: its caches make their files through the module's
+    ``IndexDataCacheFile``, replaced here by a subclass that changes nothing elsewhere)."""
+    from numba.core import caching
+
+    caching.IndexDataCacheFile = _verified_cache_file(caching.IndexDataCacheFile)
 
 
 def _entry_problem(folder: Path, source: str) -> str | None:
@@ -167,6 +270,7 @@ class DiskStore:
         """
         path = Path(self.location(label, key))
         folder = path.parent
+        _verify_numba_files()
         problem = _entry_problem(folder, source)
         if problem is not None:
             warnings.warn(
@@ -186,7 +290,9 @@ class DiskStore:
     def cache_kernels(self) -> None:
         """Have numba keep the cache files of softcell's own compiled functions (kernels,
         built-in components) in the entry :data:`KERNELS` of this cache, not beside their
-        sources in site-packages, so that ``softcell cache clear`` removes them too."""
+        sources in site-packages, so that ``softcell cache clear`` removes them too; and
+        have numba check each of its cache files in this cache before reading it."""
+        _verify_numba_files()
         _use_kernel_locator()
 
 
@@ -326,6 +432,7 @@ def entries(root: Path | None = None) -> list[Entry]:
                 str(meta["created"]),
                 size,
                 _stale(meta, current),
+                _numba_files_ok(folder) or "",
             )
         )
     return sorted(out, key=lambda e: e.created)
@@ -341,8 +448,8 @@ def _stale(meta: dict[str, str], environment: str) -> bool:
 
 
 def clear(root: Path | None = None, stale_only: bool = False) -> int:
-    """Remove every entry (only the stale ones with ``stale_only``); return how many were
-    removed. Processes running from an entry keep what they loaded.
+    """Remove every entry (only the stale and the damaged ones with ``stale_only``); return
+    how many were removed. Processes running from an entry keep what they loaded.
 
     Raises
     ------
@@ -361,7 +468,7 @@ def clear(root: Path | None = None, stale_only: bool = False) -> int:
             f"not make (e.g. {strangers[0].name}); nothing removed (check "
             f"${CACHE_ENV})"
         )
-    found = [e for e in entries(root) if e.stale or not stale_only]
+    found = [e for e in entries(root) if e.stale or e.damaged or not stale_only]
     failed: list[str] = []
     for entry in found:
         try:
