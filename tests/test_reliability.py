@@ -4,6 +4,7 @@ nothing touched that softcell did not make."""
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -39,6 +40,40 @@ def configs(tmp_path):
     locked.chmod(0)
     yield {"latin": latin, "folder": folder, "locked": locked}
     locked.chmod(0o644)
+
+
+def test_a_configuration_file_with_a_byte_order_mark_is_read(tmp_path, capsys):
+    # Before: "not valid TOML: Invalid statement (at line 1, column 1)" (Notepad's UTF-8).
+    config = tmp_path / "bom.toml"
+    config.write_bytes(b"\xef\xbb\xbf[parameters]\nradius = 5.5\n")
+    assert main(["params", str(config)]) == 0
+    assert re.search(r"^radius\s+5\.5\s+cm", capsys.readouterr().out, re.MULTILINE)
+
+
+@pytest.mark.parametrize(
+    ("given", "words"),
+    [
+        # before: "parameter radius = '8cm' cm is not allowed: must be > 0 cm"
+        (
+            ["--radius", "8cm"],
+            "radius = '8cm' is not allowed: it is not a number: write "
+            "radius as a plain number in cm, without its unit (must be > 0 cm)",
+        ),
+        ('radius = "five"', "radius = 'five' is not allowed: it is not a number"),
+        # before: "parameter obstacles = 5 cm is not allowed: must be any finite value cm"
+        ("radius = 5\nobstacles = 5", "obstacles = 5 is not allowed: must be text, in quotes"),
+    ],
+)
+def test_a_value_of_the_wrong_type_says_what_is_meant(tmp_path, capsys, given, words):
+    argv = ["simulate", "-o", str(tmp_path / "out")]
+    if isinstance(given, str):
+        config = tmp_path / "run.toml"
+        config.write_text(f"[parameters]\n{given}\n", encoding="utf-8")
+        argv.insert(1, str(config))
+    else:
+        argv += given
+    line = one_line_exit_2(argv, capsys)
+    assert words in line, line
 
 
 @pytest.mark.parametrize("command", ["simulate", "params"])
@@ -124,6 +159,15 @@ def test_the_library_names_a_wrong_argument(tmp_path, call, words):
         ),
         (["calibrate", "--push-speed", "0.1", "--radius", "4", "--workers", "0"], "--workers = 0"),
         (["study", "sensitivity", "-o", "S", "--only", ","], "names no variant to compare"),
+        # before: the study marked S as its own (study.json) and refused a rerun with
+        # another seed, though nothing was computed
+        (["study", "constriction", "-o", "S", "--workers", "0"], "--workers = 0 is not allowed"),
+        # before: 1000 local workers started (493 tracebacks, deaf to SIGTERM)
+        (["simulate", "--radius", "4", "-o", "S", "--workers", "1000"], "(4 per core)"),
+        (["study", "constriction", "-o", "S", "--workers", "1000"], "(4 per core)"),
+        (["reproduce", "--quick", "-o", "S", "--workers", "1000"], "(4 per core)"),
+        (["calibrate", "--push-speed", "0.1", "--workers", "1000"], "(4 per core)"),
+        (["simulate", "--radius", "4", "-o", "S", "--workers", "two"], "not a whole number"),
     ],
 )
 def test_requests_refused_before_computing(tmp_path, capsys, monkeypatch, argv, words):
@@ -540,6 +584,17 @@ def test_a_study_folder_is_kept_for_its_own_study_and_seed(tmp_path):
     assert json.loads((tmp_path / "study.json").read_text()) == {"study": "beyond", "seed": 4}
 
 
+def test_the_library_bounds_local_workers(tmp_path):
+    from softcell.model.configuration import RunConfig
+    from softcell.runner.ensemble import simulate
+    from softcell.runner.points import WORKERS_PER_CORE, cores
+
+    too_many = WORKERS_PER_CORE * cores() + 1
+    with pytest.raises(SoftcellError, match=f"workers = {too_many} is not allowed: this machine"):
+        simulate(RunConfig(parameters={"radius": 4.0}), tmp_path / "out", workers=too_many)
+    assert not (tmp_path / "out").exists()
+
+
 # -- track stops its reader on every error -----------------------------------------------------
 
 
@@ -703,3 +758,64 @@ def test_a_second_local_cluster_on_the_machine_says_nothing(tmp_path):
         held.close()
     assert run.returncode == 0, run.stderr
     assert "already in use" not in run.stderr and run.stderr.strip() == "", run.stderr
+
+
+@pytest.mark.parametrize("verb", ["export", "animate"])
+def test_a_long_legal_output_name_is_written(one_run, tmp_path, verb):
+    # Before: a 250-byte name is legal, but its temporary name was not (a traceback from gsd
+    # and from av: "File name too long").
+    out, _, _ = one_run
+    name = "a" * 246 + (".gsd" if verb == "export" else ".gif")
+    where = tmp_path / "outputs"
+    assert main([verb, str(out), "-o", str(where / name)]) == 0
+    assert (where / name).stat().st_size > 0
+    assert [p.name for p in where.iterdir()] == [name]
+
+
+@pytest.mark.parametrize("verb", ["export", "animate", "analyze", "simulate"])
+def test_a_name_too_long_for_the_file_system_is_one_line(one_run, tmp_path, capsys, verb):
+    # Before: an OSError traceback from files.py (export, animate) once the work was done.
+    out, _, _ = one_run
+    name = "b" * 296 + (".gif" if verb == "animate" else ".nc")
+    argv = (
+        ["simulate", "--radius", "4", "--duration", "0.2"]
+        if verb == "simulate"
+        else [verb, str(out)]
+    )
+    where = tmp_path / "outputs"
+    line = one_line_exit_2([*argv, "-o", str(where / name)], capsys)
+    assert f"that name is {len(name)} bytes long, and file systems take at most 255" in line
+    assert not where.exists()
+
+
+def test_a_killed_writers_temporary_files_are_removed_by_the_next_run(one_run, tmp_path):
+    # Before: a killed export left .NAME.PID-RAND.tmp.gsd (14.7 MB), and a killed checkpoint
+    # write ..pointP_realizationR.ckpt.PID-RAND.tmp.npz, for good. Such a name records the
+    # writer's pid and host: the next write into the folder removes those of dead writers
+    # on this host, and keeps those of running processes and of other hosts.
+    from softcell.io.files import temporary_path
+
+    out, _, _ = one_run
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    pid = int(dead.stdout)
+    mine = temporary_path(tmp_path / "movie.gsd").name
+    host = mine.split(".")[-3].split("-")[1]
+    left = {
+        f".movie.{pid}-{host}-0a1b2c.tmp.gsd": False,  # a dead writer of this host
+        f".movie.{pid}-9e8d7c.tmp.gsd": False,  # the same, named by softcell 0.2
+        f".movie.{os.getppid()}-{host}-0a1b2c.tmp.gsd": True,  # a running process
+        f".movie.{pid}-{'0000' if host != '0000' else '1111'}-0a1b2c.tmp.gsd": True,  # elsewhere
+        ".notes.txt": True,  # not softcell's
+    }
+    where = tmp_path / "outputs"
+    where.mkdir()
+    for name in left:
+        (where / name).write_bytes(b"partial")
+    assert main(["export", str(out), "-o", str(where / "movie.gsd")]) == 0
+    kept = {p.name for p in where.iterdir()} - {"movie.gsd"}
+    assert kept == {name for name, stays in left.items() if stays}

@@ -20,7 +20,13 @@ from collections.abc import Callable, Sequence
 from softcell._version import __version__
 from softcell.cli import analyze, fit, paper, run, studies, video
 from softcell.cli.flags import Help, Parser
-from softcell.engine.interrupt import exit_status, received, stop_signals
+from softcell.engine.interrupt import (
+    STOP_SIGNALS,
+    exit_status,
+    received,
+    shielded,
+    stop_signals,
+)
 from softcell.errors import CacheWarning, PluginWarning, SoftcellError
 
 #: Each verb: its one-line help and what adds its flags, in the order ``--help`` lists them.
@@ -135,7 +141,20 @@ def main(argv: Sequence[str] | None = None) -> int:
                         )
                     return status
                 except KeyboardInterrupt as exc:
-                    return _interrupted(exc)
+                    with shielded():  # another signal must not break the last words
+                        return _interrupted(exc)
+                except Exception as exc:
+                    if not received():
+                        raise
+                    # Broken by the stop itself (numba stopped half way through compiling
+                    # a function fails the next one): the stop is what happened.
+                    with shielded():
+                        return _interrupted(
+                            KeyboardInterrupt(
+                                f"interrupted (as it stopped: {type(exc).__name__}: {exc}); "
+                                "rerun the same command to resume"
+                            )
+                        )
         except SoftcellError as exc:
             print(f"softcell: error: {_one_line(exc)}", file=sys.stderr)
             return 2
@@ -156,6 +175,10 @@ def entry() -> None:
     """The console script: :func:`main`, then an exit that skips the interpreter's teardown
     of compiled code (~0.6 s after a simulation), once output is flushed and exit handlers
     have run."""
+    # Signals before and after main()'s own handling are ignored: a second SIGTERM arriving
+    # as the handlers are restored must not kill the process on its way out (exit -15).
+    for number in STOP_SIGNALS:
+        signal.signal(number, signal.SIG_IGN)
     try:
         code = main()
         sys.stdout.flush()

@@ -107,7 +107,7 @@ def workers(p: argparse.ArgumentParser, help: str, scheduler: bool = False) -> N
     """``--workers N`` (local processes), with ``--scheduler ADDRESS`` (a dask.distributed
     cluster) as its alternative when ``scheduler``."""
     group = p.add_mutually_exclusive_group() if scheduler else p
-    group.add_argument("--workers", type=int, help=help)
+    group.add_argument("--workers", type=_worker_count, help=help)
     if scheduler:
         group.add_argument(
             "--scheduler",
@@ -327,10 +327,21 @@ def given(**values: Any) -> dict[str, Any]:
 
 
 def check_workers(value: int | None) -> int:
-    """``--workers`` as a count (1 when not given); refused below 1."""
-    if value is not None and value < 1:
-        raise SoftcellError(f"--workers = {value} is not allowed: must be >= 1")
-    return value or 1
+    """``--workers`` as a count (1 when not given), checked as
+    :func:`softcell.runner.points.check_worker_count` does."""
+    return 1 if value is None else _worker_count(str(value))
+
+
+def _worker_count(text: str) -> int:
+    """The ``--workers`` flag's value, checked as it is parsed (before a study marks its
+    folder or a run plans anything)."""
+    from softcell.runner.points import check_worker_count
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise SoftcellError(f"--workers {text!r} is not a whole number") from None
+    return check_worker_count(value, "--workers")
 
 
 def note(line: str) -> None:

@@ -16,7 +16,7 @@ import numpy as np
 
 from softcell.components.contracts import Schedule, Stepper
 from softcell.engine.diagnose import diagnose
-from softcell.engine.interrupt import received
+from softcell.engine.interrupt import received, shielded
 from softcell.engine.model import Model
 from softcell.engine.state import (
     Record,
@@ -175,7 +175,8 @@ def run_realization(
     except KeyboardInterrupt:
         # The stepper may have been stopped half way through a chunk: save what is whole.
         if checkpoint is not None:
-            keep(done, done_state)
+            with shielded():
+                keep(done, done_state)
         raise Interrupted(
             f"interrupted at t = {times[done - 1]:.2f} s of {label}"
             + ("; rerun the same command to resume" if checkpoint else "")

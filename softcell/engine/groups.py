@@ -25,7 +25,7 @@ from threadpoolctl import threadpool_limits
 
 from softcell.components.contracts import Schedule, Stepper
 from softcell.engine.cell import SAMPLES_PER_CALL, Checkpoint, SampleGrid, Saved
-from softcell.engine.interrupt import received
+from softcell.engine.interrupt import received, shielded
 from softcell.engine.model import Model
 from softcell.engine.state import (
     check_state,
@@ -416,7 +416,8 @@ def run_assembly(
                 raise KeyboardInterrupt
     except KeyboardInterrupt:
         if checkpoint is not None:
-            checkpoint.save(grid.saved_cells(done, done_states))
+            with shielded():
+                checkpoint.save(grid.saved_cells(done, done_states))
         raise Interrupted(
             f"interrupted at t = {times[done - 1]:.2f} s of {label}"
             + ("; rerun the same command to resume" if checkpoint else "")

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from softcell.engine.interrupt import deferred
 from softcell.errors import ConfigError
 from softcell.fit.measure import WARMUP
 from softcell.fit.priors import Prior, resolve_priors
@@ -303,5 +304,5 @@ def _check_dataset(priors, check: dict[str, np.ndarray]):
 def _write(result: Any, out: Path) -> None:
     from softcell.io.files import atomic_write
 
-    with atomic_write(out) as tmp:
+    with atomic_write(out) as tmp, deferred():
         result.to_netcdf(tmp)

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from softcell.engine.interrupt import deferred
 from softcell.errors import ConfigError
 from softcell.fit.priors import Prior, resolve_priors
 from softcell.model.configuration import RunConfig
@@ -182,7 +183,7 @@ def search(
     result = _dataset(priors, values, topics, matrix, design, seed)
     from softcell.io.files import atomic_write
 
-    with atomic_write(out) as tmp:
+    with atomic_write(out) as tmp, deferred():
         result.to_netcdf(tmp)
     page = out.with_suffix(".md")
     with atomic_write(page) as tmp:

@@ -33,7 +33,7 @@ def read_toml(path: str | os.PathLike[str]) -> dict:
     """
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a BOM (Notepad) is no TOML
     except FileNotFoundError:
         raise ConfigError(f"no such configuration file: {path}") from None
     except IsADirectoryError:

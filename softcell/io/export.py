@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from softcell.engine.interrupt import deferred
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.io.files import gsd_attributes as gsd_attributes  # read here, kept with the files
@@ -301,7 +302,7 @@ def to_movement(
             "softcell_attributes": json.dumps({k: _plain(v) for k, v in ds.attrs.items()}),
         },
     )
-    with atomic_write(path) as tmp:
+    with atomic_write(path) as tmp, deferred():
         poses.to_netcdf(tmp)
     span = (float(time[0]), float(time[-1]))
     return Exported(path, int(time.size), len(KEYPOINTS) * len(names), span)

@@ -17,8 +17,11 @@ from __future__ import annotations
 
 import errno
 import fcntl
+import functools
+import hashlib
 import json
 import os
+import re
 import secrets
 import shutil
 import socket
@@ -27,6 +30,7 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
+from softcell.engine.interrupt import deferred, shielded
 from softcell.errors import SoftcellError
 from softcell.model.limits import human_bytes
 
@@ -54,12 +58,75 @@ def no_input(path: str | os.PathLike[str], what: str = "file") -> SoftcellError:
     return SoftcellError(f"no such {what}: {path}")
 
 
+#: The longest file name most file systems take, in bytes.
+NAME_MAX = 255
+
+#: A temporary name of :func:`temporary_path`: its target's name, the writer's pid and host
+#: (a digest; absent in names of softcell 0.2), a random token.
+_TEMPORARY = re.compile(
+    r"^\.(?P<stem>.+)\.(?P<pid>\d+)-(?:(?P<host>[0-9a-f]{4})-)?[0-9a-f]{6}\.tmp(\.[^.]*)?$"
+)
+
+_swept: set[Path] = set()  # folders whose leftovers this process has removed
+
+
+@functools.cache
+def _host() -> str:
+    return hashlib.sha1(socket.gethostname().encode()).hexdigest()[:4]
+
+
 def temporary_path(path: str | os.PathLike[str]) -> Path:
     """A hidden name beside ``path``, unique to this process and call, keeping the suffix
-    (``.name.<pid>-<token>.tmp.nc``): writers that infer the format from it still can, and
-    sweep readers skip it (hidden)."""
+    (``.name.<pid>-<host>-<token>.tmp.nc``): writers that infer the format from it still can,
+    and sweep readers skip it (hidden). A name too long for the file system with these parts
+    keeps its start and a digest of the rest."""
     path = Path(path)
-    return path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(3)}.tmp{path.suffix}")
+    tail = f".{os.getpid()}-{_host()}-{secrets.token_hex(3)}.tmp{path.suffix}"
+    stem = path.stem
+    room = NAME_MAX - len(tail.encode()) - 1
+    if len(stem.encode()) > room:
+        digest = hashlib.sha1(stem.encode()).hexdigest()[:12]
+        stem = stem.encode()[: room - 13].decode(errors="ignore") + "~" + digest
+    return path.with_name(f".{stem}{tail}")
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it exists
+        return True
+    return True
+
+
+def remove_leftovers(directory: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporary files that writers on this host left in ``directory`` when they
+    were killed (their pid, which the name records, runs no more); return them. Files of
+    running processes and of other hosts (a cluster's workers share the folder) are kept."""
+    removed = []
+    try:
+        found = [e for e in os.scandir(directory) if e.name.startswith(".") and ".tmp" in e.name]
+    except OSError:
+        return removed
+    for entry in found:
+        match = _TEMPORARY.match(entry.name)
+        if match is None or match["host"] not in (None, _host()) or not entry.is_file():
+            continue
+        pid = int(match["pid"])
+        if pid != os.getpid() and not _running(pid):
+            with suppress(OSError):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+    return removed
+
+
+def _sweep_once(directory: Path) -> None:
+    """:func:`remove_leftovers` of ``directory``, once per process."""
+    key = Path(os.path.abspath(directory))
+    if key not in _swept:
+        _swept.add(key)
+        remove_leftovers(key)
 
 
 def _existing_ancestor(path: Path) -> Path:
@@ -144,22 +211,24 @@ def atomic_files(*, makedirs: bool = True) -> Iterator[_Staging]:
     staging = _Staging(makedirs)
     try:
         yield staging
-        for tmp, path in staging.files:
-            if not tmp.exists():
-                raise SoftcellError(f"internal error: {path} was staged but not written")
-            with open(tmp, "rb+") as fh:
-                os.fsync(fh.fileno())
-        for tmp, path in staging.files:
-            os.replace(tmp, path)
-        for directory in {p.parent for _, p in staging.files}:
-            _fsync_directory(directory)
+        with deferred():  # a stop signal stops the run once every file has its final name
+            for tmp, path in staging.files:
+                if not tmp.exists():
+                    raise SoftcellError(f"internal error: {path} was staged but not written")
+                with open(tmp, "rb+") as fh:
+                    os.fsync(fh.fileno())
+            for tmp, path in staging.files:
+                os.replace(tmp, path)
+            for directory in {p.parent for _, p in staging.files}:
+                _fsync_directory(directory)
     except BaseException as exc:
-        for tmp, _ in staging.files:
-            with suppress(OSError):
-                tmp.unlink(missing_ok=True)
-        for directory in reversed(staging.created):
-            with suppress(OSError):
-                directory.rmdir()  # only if still empty
+        with shielded():  # nothing interrupts the removal of the temporary files
+            for tmp, _ in staging.files:
+                with suppress(OSError):
+                    tmp.unlink(missing_ok=True)
+            for directory in reversed(staging.created):
+                with suppress(OSError):
+                    directory.rmdir()  # only if still empty
         if isinstance(exc, StorageError | KeyboardInterrupt):
             raise
         for _, path in staging.files:
@@ -179,6 +248,7 @@ class _Staging:
         final = Path(final)
         if final.is_dir():
             raise SoftcellError(f"cannot write {final}: it is a directory")
+        _check_name_length(final, "cannot write")
         if self.makedirs:
             missing = [p for p in (final.parent, *final.parent.parents) if not p.exists()]
             self.created.extend(reversed(missing))
@@ -186,6 +256,7 @@ class _Staging:
                 final.parent.mkdir(parents=True, exist_ok=True)
             except OSError as exc:
                 raise _error(final, storage_problem(final, exc) or str(exc)) from None
+        _sweep_once(final.parent)
         tmp = temporary_path(final)
         self.files.append((tmp, final))
         return tmp
@@ -276,6 +347,17 @@ def _check_replaceable(path: Path, kind: str, option: str) -> None:
     raise SoftcellError(f"{option} {path} {what}; pass --overwrite to replace it")
 
 
+def _check_name_length(path: Path, what: str) -> None:
+    """Refuse a path with a part longer than the file system takes (:data:`NAME_MAX`)."""
+    for part in path.parts:
+        size = len(part.encode())
+        if size > NAME_MAX:
+            raise SoftcellError(
+                f"{what} {part[:32]}...: that name is {size} bytes long, and file systems "
+                f"take at most {NAME_MAX}"
+            )
+
+
 def check_output(
     path: str | os.PathLike[str],
     kind: str,
@@ -311,6 +393,7 @@ def check_output(
         One line naming the output, the problem and the way out.
     """
     path = Path(os.path.abspath(path))
+    _check_name_length(path, option)
     for source in inputs:
         _check_apart_from_input(path, Path(os.path.abspath(source)), directory, option)
     if directory:
@@ -413,14 +496,16 @@ def folder_lock(directory: str | os.PathLike[str], command: str) -> Iterator[Pat
             break
         os.close(fd)
     try:
+        remove_leftovers(directory)
         os.ftruncate(fd, 0)
         me = {"command": command, "pid": os.getpid(), "host": socket.gethostname()}
         os.write(fd, json.dumps({**me, "since": time.time()}).encode())
         yield lock
     finally:
-        with suppress(OSError):
-            lock.unlink()  # before the lock goes: whoever opens it next sees it is gone
-        os.close(fd)
+        with shielded():
+            with suppress(OSError):
+                lock.unlink()  # before the lock goes: whoever opens it next sees it is gone
+            os.close(fd)
 
 
 def folder_in_use(directory: str | os.PathLike[str]) -> str | None:

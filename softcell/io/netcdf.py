@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 
 import softcell.analysis.accessor  # noqa: F401  (registers ds.softcell)
+from softcell.engine.interrupt import deferred
 from softcell.errors import ConfigError, SoftcellError
 from softcell.io.files import atomic_write, folder_in_use, no_input
 from softcell.model.parameters import MODEL_PARAMETERS, ParameterSpec
@@ -168,7 +169,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike[str], *, complevel: in
     path = Path(path)
     ds = _to_cf(ds).copy()
     ds.attrs = {k: v for k, v in ds.attrs.items() if k != CHECKSUM}
-    with atomic_write(path) as tmp:
+    with atomic_write(path) as tmp, deferred():  # no signal inside netCDF's locked section
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=_encoding(ds, complevel))
         import netCDF4
 

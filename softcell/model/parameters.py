@@ -71,6 +71,8 @@ class ParameterSpec:
         """The allowed range as a phrase, with the unit: ``"> 0 cm"``."""
         if self.choices is not None:
             return "must be one of " + ", ".join(repr(c) for c in self.choices)
+        if self.kind is str:
+            return f"must be text, in quotes ({self.long_name})"
         parts = []
         unit = "" if self.unit == "1" else f" {self.unit}"
         if self.minimum is not None:
@@ -84,7 +86,9 @@ class ParameterSpec:
 
     def coerce(self, value: Any) -> Value:
         """Convert ``value`` (from TOML, a flag or an attribute) to ``kind``, or raise."""
-        bad = ParameterError(self.name, repr(value), self.allowed(), self.unit)
+        bad = ParameterError(
+            self.name, repr(value), self.allowed(), "" if self.kind is str else self.unit
+        )
         if isinstance(value, bool):  # numpy's bool is no numbers.Real: refused below
             raise bad
         if self.kind is str:
@@ -95,14 +99,24 @@ class ParameterSpec:
             try:
                 value = float(value)
             except ValueError:
-                raise bad from None
+                raise self._not_a_number(value) from None
         if not isinstance(value, numbers.Real):  # numpy's scalars too (np.float32(8))
-            raise bad
+            raise self._not_a_number(value)
         if self.kind is int:
             if not float(value).is_integer():
                 raise bad
             return int(value)
         return float(value)
+
+    def _not_a_number(self, value: Any) -> ParameterError:
+        """The error for a value that is no number at all ("8cm", "five", a list)."""
+        unit = "" if self.unit in ("", "1") else f" in {self.unit}"
+        return ParameterError(
+            self.name,
+            repr(value),
+            f"it is not a number: write {self.name} as a plain number{unit}, without its "
+            f"unit ({self.allowed()})",
+        )
 
     def check(self, value: Value) -> None:
         """Raise :class:`ParameterError` unless ``value`` (already coerced) is allowed."""

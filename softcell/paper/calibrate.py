@@ -30,6 +30,7 @@ import numpy as np
 
 from softcell.errors import SoftcellError
 from softcell.model.configuration import RunConfig
+from softcell.runner.points import check_worker_count
 
 #: Relative step in the parameter for the slope behind the uncertainty.
 SLOPE_STEP = 0.03
@@ -135,8 +136,7 @@ def _common(realizations: int, duration: float, settle: float, workers: int) -> 
             f"the averaging window [{settle:g}, {duration:g}] s is empty: "
             "need 0 <= settle < duration"
         )
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SoftcellError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
+    check_worker_count(workers)
 
 
 def push_speed(ds, settle: float) -> np.ndarray:

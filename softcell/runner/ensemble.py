@@ -30,6 +30,7 @@ from softcell.model.limits import check_run, check_seed
 from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
+from softcell.runner.points import check_worker_count
 from softcell.runner.resume import expected_bytes, resume_plan
 from softcell.runner.tasks import STOP_FILE, Task, component_code, run_task, stored_components
 from softcell.settings import CHECKPOINT_EVERY
@@ -187,8 +188,7 @@ def _check_execution(
     workers: int, scheduler: str | None, client: Any, checkpoint_every: float
 ) -> None:
     """Raise a one-line :class:`SoftcellError` for a bad choice of where and how to run."""
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SoftcellError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
+    check_worker_count(workers)
     if sum([scheduler is not None, workers != 1, client is not None]) > 1:
         raise SoftcellError(
             f"workers = {workers}, scheduler = {scheduler!r} and a client "

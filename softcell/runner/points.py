@@ -17,25 +17,50 @@ from typing import Any
 
 from softcell.errors import SoftcellError
 
+#: Local worker processes per core, at most: more only share the cores and the memory.
+WORKERS_PER_CORE = 4
 
-def worker_count(workers: int | None, scheduler: str | None) -> int | None:
-    """The local worker processes: as given, or every core when neither they nor a scheduler
-    are given.
+
+def cores() -> int:
+    """The cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def check_worker_count(workers: Any, name: str = "workers") -> int:
+    """``workers`` local worker processes, checked: an integer from 1 to
+    :data:`WORKERS_PER_CORE` per core of this machine.
 
     Raises
     ------
     SoftcellError
-        For fewer than one worker.
+        One line naming the value (as ``name``) and the bound.
     """
-    if workers is not None and workers < 1:
-        raise SoftcellError(f"workers = {workers} is not allowed: must be >= 1")
-    if scheduler is None and workers is None:
-        return (
-            len(os.sched_getaffinity(0))
-            if hasattr(os, "sched_getaffinity")
-            else (os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SoftcellError(f"{name} = {workers!r} is not allowed: must be an integer >= 1")
+    most = WORKERS_PER_CORE * cores()
+    if workers > most:
+        raise SoftcellError(
+            f"{name} = {workers} is not allowed: this machine has {cores()} core(s), so at "
+            f"most {most} local workers ({WORKERS_PER_CORE} per core); for more, run on a "
+            "dask.distributed cluster (--scheduler ADDRESS)"
         )
     return workers
+
+
+def worker_count(workers: int | None, scheduler: str | None) -> int | None:
+    """The local worker processes: as given (checked by :func:`check_worker_count`), or every
+    core when neither they nor a scheduler are given.
+
+    Raises
+    ------
+    SoftcellError
+        For fewer than one worker, or more than the machine can run.
+    """
+    if workers is not None:
+        return check_worker_count(workers)
+    return cores() if scheduler is None else None
 
 
 def run_points(

@@ -24,6 +24,7 @@ from softcell.components.registry import Registry, default_registry
 from softcell.engine import Model, Stepper, build_integrator, build_model
 from softcell.engine.cell import Saved, realization_rng, record_dataset, run_realization
 from softcell.engine.groups import cell_rngs
+from softcell.engine.interrupt import deferred
 from softcell.errors import Interrupted, PluginWarning, SoftcellError
 from softcell.io.files import atomic_write
 from softcell.model.parameters import Parameters
@@ -227,7 +228,7 @@ def save_checkpoint(
     """Write a checkpoint atomically: the request (JSON), the first grid sample still to
     compute, the samples so far (the membrane's modes in cm; the pose in cm and rad and the
     centre g_0 in cm at every grid sample) and the stepper's state arrays."""
-    with atomic_write(path) as tmp:
+    with atomic_write(path) as tmp, deferred():
         np.savez(
             tmp,
             request=np.array(request),
@@ -362,8 +363,10 @@ def _run_and_write(
         },
         "scalar_coords": task.swept,
     }
-    write_dataset(dataset(record, stored), path)
-    checkpoint.unlink(missing_ok=True)
+    ds = dataset(record, stored)
+    with deferred():  # the file and no checkpoint, or the checkpoint and no file
+        write_dataset(ds, path)
+        checkpoint.unlink(missing_ok=True)
     return str(path)
 
 
