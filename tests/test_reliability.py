@@ -168,6 +168,25 @@ def test_the_library_names_a_wrong_argument(tmp_path, call, words):
         (["reproduce", "--quick", "-o", "S", "--workers", "1000"], "(4 per core)"),
         (["calibrate", "--push-speed", "0.1", "--workers", "1000"], "(4 per core)"),
         (["simulate", "--radius", "4", "-o", "S", "--workers", "two"], "not a whole number"),
+        # before: ZeroDivisionError, a math domain error, a 14.6 TiB allocation
+        *(
+            (
+                ["simulate", "--radius", "4", "-o", "S", "--protocol", "active_brownian"]
+                + ["--noise-interval", value],
+                f"noise_interval = {value} s is not allowed: must be >= 0.001 s",
+            )
+            for value in ("0.0", "-0.05", "1e-12")
+        ),
+        # before: accepted (bump_and_turn's bot never ran; graspion turned backwards)
+        (
+            ["simulate", "--radius", "4", "-o", "S", "--protocol", "bump_and_turn"]
+            + ["--contact-threshold", "0"],
+            "contact_threshold = 0.0 N is not allowed: must be > 0 N",
+        ),
+        (
+            ["simulate", "--radius", "4", "-o", "S", "--protocol", "graspion", "--turn-rate", "-3"],
+            "turn_rate = -3.0 rad s-1 is not allowed: must be > 0 rad s-1",
+        ),
     ],
 )
 def test_requests_refused_before_computing(tmp_path, capsys, monkeypatch, argv, words):

@@ -39,7 +39,11 @@ def _spec(name: str, default: float, unit: str, long_name: str) -> ParameterSpec
 
 
 TURN_RATE = ParameterSpec(
-    "turn_rate", GRASPION_TURN_RATE, "rad s-1", "angular speed of a free graspion tumble"
+    "turn_rate",
+    GRASPION_TURN_RATE,
+    "rad s-1",
+    "angular speed of a free graspion tumble (its sense is the tumble's)",
+    minimum=0.0,
 )
 PIVOT_CCW = _spec(
     "pivot_ccw", GRASPION_PIVOT_CCW, "cm", "pivot offset of a counterclockwise graspion tumble"
@@ -49,13 +53,20 @@ ROTATIONAL_DIFFUSION = _spec(
     "rotational_diffusion", 1.0, "rad2 s-1", "rotational diffusion coefficient D_r of the heading"
 )
 NOISE_INTERVAL = ParameterSpec(
-    "noise_interval", 0.05, "s", "interval of the piecewise-constant active_brownian torque"
+    "noise_interval",
+    0.05,
+    "s",
+    "interval of the piecewise-constant active_brownian torque (from 1 ms: one value is "
+    "stored per interval)",
+    minimum=1e-3,
+    minimum_inclusive=True,
 )
 CONTACT_THRESHOLD = ParameterSpec(
     "contact_threshold",
     0.02,
     "N",
     "force of the membrane on the bot that ends a bump_and_turn run",
+    minimum=0.0,
 )
 CHIRAL_TORQUE = ParameterSpec(
     "chiral_torque", 28.5, "N cm", "constant torque on the bot during a chiral run"
