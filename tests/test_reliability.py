@@ -838,3 +838,43 @@ def test_a_killed_writers_temporary_files_are_removed_by_the_next_run(one_run, t
     assert main(["export", str(out), "-o", str(where / "movie.gsd")]) == 0
     kept = {p.name for p in where.iterdir()} - {"movie.gsd"}
     assert kept == {name for name, stays in left.items() if stays}
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        # before: one point written twice; internal wall strings; three equal panels
+        (["study", "constriction", "-o", "S", "--radii", "5,5"], "--radii names 5 twice"),
+        (["study", "constriction", "-o", "S", "--gaps", "1.0,1"], "--gaps names 1 twice"),
+        (["study", "strategies", "-o", "S", "--strategies", "graspion,graspion"], "twice"),
+        (["animate", "{a}", "-o", "S/m.gif", "--realizations", "0,0,0"], "names 0 twice"),
+        # before: xarray's "Could not find any dimension coordinates"
+        (["analyze", "{a}/point000_realization0000.nc"] * 1 + ["{a}"] + ["-o", "S/a.nc"],
+         "is given twice: give each file or folder once"),
+        # before: tracebacks, or (radius=-1) the last point animated
+        (["animate", "{a}", "-o", "S/m.gif", "--point", "radius=5"],
+         "--point radius=5 is not allowed: an index from 0 to 1, not a value (radius = 4, 5 cm)"),
+        (["animate", "{a}", "-o", "S/m.gif", "--point", "radius=-1"], "an index from 0 to 1"),
+        (["animate", "{a}", "-o", "S/m.gif", "--point", "cutoff=0"],
+         "--point cutoff=0 is not allowed: its sweep dimensions are radius"),
+        (["animate", "{a}/point000_realization0000.nc", "-o", "S/m.gif", "--point", "radius=0"],
+         "the input is one parameter point, so there is no point to choose"),
+    ],
+)  # fmt: skip
+def test_repeated_or_misplaced_choices_are_one_line(
+    two_sweeps, tmp_path, capsys, monkeypatch, argv, words
+):
+    monkeypatch.chdir(tmp_path)
+    argv = [a.replace("{a}", str(two_sweeps / "a")) for a in argv]
+    line = one_line_exit_2(argv, capsys)
+    assert words in line, line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_json_outputs_hold_no_nan():
+    # Before: `study constriction --realizations 1` wrote NaN into constriction.json (no JSON).
+    from softcell.io.files import json_text
+
+    text = json_text({"a": float("nan"), "b": [np.float64("inf"), 1.5], "c": "x"})
+    assert json.loads(text) == {"a": None, "b": [None, 1.5], "c": "x"}
+    assert "NaN" not in text and "Infinity" not in text

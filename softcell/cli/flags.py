@@ -316,6 +316,23 @@ def numbers(name: str, raw: str | None) -> list[float] | None:
         raise SoftcellError(f"{name} {raw!r} is not a comma-separated list of numbers") from None
 
 
+def distinct(name: str, values: list[Any] | None) -> list[Any] | None:
+    """``values`` of the flag ``name``, refused in one line when one comes twice (a point
+    computed twice, a panel drawn twice)."""
+    seen: list[Any] = []
+    for value in values or []:
+        if value in seen:
+            shown = f"{value:g}" if isinstance(value, float) else f"{value}"
+            raise SoftcellError(f"{name} names {shown} twice: give each value once")
+        seen.append(value)
+    return values
+
+
+def distinct_numbers(name: str, raw: str | None) -> list[float] | None:
+    """:func:`numbers`, each once (:func:`distinct`)."""
+    return distinct(name, numbers(name, raw))
+
+
 def names(raw: str | None) -> list[str] | None:
     """The comma-separated names of a flag, None when it was not given."""
     return None if raw is None else [n.strip() for n in raw.split(",") if n.strip()]

@@ -210,7 +210,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         write_calibration,
     )
 
-    radius = flags.numbers("--radius", args.radius)
+    radius = flags.distinct_numbers("--radius", args.radius)
     ipr, ipr_error = flags.numbers("--ipr", args.ipr), flags.numbers("--ipr-error", args.ipr_error)
     _check_calibration_request(args, radius, ipr)
     config = load_config(args.config) if args.config else RunConfig()

@@ -39,11 +39,11 @@ DESIGN_FLAGS: dict[str, tuple[str | None, str]] = {
 }
 #: How the command line reads a design flag's text.
 READ = {
-    "radii": flags.numbers,
-    "gaps": flags.numbers,
-    "fractions": flags.numbers,
-    "strategies": lambda _, raw: flags.names(raw),
-    "only": lambda _, raw: flags.names(raw),
+    "radii": flags.distinct_numbers,
+    "gaps": flags.distinct_numbers,
+    "fractions": flags.distinct_numbers,
+    "strategies": lambda name, raw: flags.distinct(name, flags.names(raw)),
+    "only": lambda name, raw: flags.distinct(name, flags.names(raw)),
 }
 
 

@@ -238,7 +238,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     from softcell.io.files import check_output
     from softcell.io.netcdf import open_inputs
     from softcell.video.animate import animate
-    from softcell.video.render import parse_point
+    from softcell.video.render import check_point, parse_point
 
     check_output(args.output, "video", inputs=[args.input], overwrite=args.overwrite)
     realizations = None
@@ -249,9 +249,11 @@ def _cmd_animate(args: argparse.Namespace) -> int:
             raise SoftcellError(
                 f"--realizations {args.realizations} is not allowed: must be indices, e.g. 0,1"
             ) from None
+        flags.distinct("--realizations", realizations)
+    point = parse_point(args.point, "--point") if args.point else {}
     ds = open_inputs([args.input], verify=args.verify)
-    if args.point:
-        ds = ds.isel(parse_point(args.point, "--point"))
+    check_point(ds, point, "--point")
+    ds = ds.isel(point)
     movie = animate(
         ds,
         args.output,

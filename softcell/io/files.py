@@ -20,6 +20,7 @@ import fcntl
 import functools
 import hashlib
 import json
+import math
 import os
 import re
 import secrets
@@ -29,6 +30,7 @@ import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
+from typing import Any
 
 from softcell.engine.interrupt import deferred, shielded
 from softcell.errors import SoftcellError
@@ -268,6 +270,24 @@ def atomic_write(path: str | os.PathLike[str], *, makedirs: bool = True) -> Iter
     ``path`` once the block ends without an error (see :func:`atomic_files`)."""
     with atomic_files(makedirs=makedirs) as staging:
         yield staging.path(path)
+
+
+def _json_ready(value: Any) -> Any:
+    """``value`` with every non-finite float (numpy's too) made None, containers walked."""
+    if isinstance(value, dict):
+        return {k: _json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def json_text(value: Any, **options: Any) -> str:
+    """``value`` as JSON text that every reader takes: NaN and infinities, which Python's
+    ``json`` writes but JSON has not, written as ``null`` (none measured). ``options`` as
+    for :func:`json.dumps`."""
+    return json.dumps(_json_ready(value), allow_nan=False, **options)
 
 
 # -- the rule of every output ---------------------------------------------------------------

@@ -126,6 +126,15 @@ def input_files(paths: list[str | os.PathLike[str]]) -> list[Path]:
             files.append(path)
         else:
             raise SoftcellError(f"no such file or directory: {path}")
+    seen: dict[Path, Path] = {}
+    for path in files:
+        same = seen.setdefault(path.resolve(), path)
+        if same is not path:
+            raise SoftcellError(
+                f"{path} is given twice"
+                + (f" (as {same})" if str(same) != str(path) else "")
+                + ": give each file or folder once"
+            )
     return files
 
 

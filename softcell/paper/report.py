@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from softcell._version import __version__
-from softcell.io.files import atomic_files
+from softcell.io.files import atomic_files, json_text
 from softcell.io.pages import Block, html_page, markdown
 from softcell.paper.findings import findings
 from softcell.schema import REGIME_NAMES
@@ -301,7 +301,7 @@ def write_report(
         blocks.append(Block("p", f"{name} was not drawn: {why}."))
     md, page = out / "report.md", out / "report.html"
     title = "softcell reproduction report"
-    summary = json.dumps(
+    summary = json_text(
         {
             "softcell_version": __version__,
             "design": design.name,

@@ -214,7 +214,7 @@ def _free_measure(path: Path) -> dict[str, Any]:
 
 def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIANTS) -> Path:
     """``beyond.md``, ``beyond.json`` and ``figures/`` in ``out`` from the variants' folders."""
-    from softcell.io.files import atomic_write
+    from softcell.io.files import atomic_write, json_text
 
     out = Path(out)
     results: dict[str, Any] = {v.name: measure(out / v.name) for v in variants}
@@ -226,7 +226,7 @@ def summarize(out: str | os.PathLike[str], variants: tuple[Variant, ...] = VARIA
     if long:
         results["free_bot_long"] = long
     with atomic_write(out / "beyond.json") as tmp:
-        tmp.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+        tmp.write_text(json_text(results, indent=1) + "\n", encoding="utf-8")
     figures = friction_figures(out / "figures", variants, results, FREE_LONG[1])
     text = _markdown(variants, results, figures)
     with atomic_write(out / "beyond.md") as tmp:

@@ -16,7 +16,6 @@ Every study is a :class:`Study`. Two kinds share the rest of their work:
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from dataclasses import asdict, replace
@@ -251,7 +250,7 @@ class GridStudy(Study):
             ``out / "<name>.md"``, beside ``<name>.json`` and ``<name>.png``.
         """
         from softcell._version import __version__
-        from softcell.io.files import atomic_write
+        from softcell.io.files import atomic_write, json_text
 
         parameters = dict(parameters or {})
         points = self.measure(out, design)
@@ -266,7 +265,7 @@ class GridStudy(Study):
             **self.conclusions(points, design),
         }
         with atomic_write(out / f"{self.name}.json") as tmp:
-            tmp.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
+            tmp.write_text(json_text(result, indent=1) + "\n", encoding="utf-8")
         caption = self.figure(out / f"{self.name}.png", result, design)
         page = out / f"{self.name}.md"
         with atomic_write(page) as tmp:

@@ -393,7 +393,7 @@ def summarize(
 ) -> Path:
     """``sensitivity.md``, ``sensitivity.json`` and ``figures/`` in ``out`` from the
     variants' folders."""
-    from softcell.io.files import atomic_write
+    from softcell.io.files import atomic_write, json_text
 
     out = Path(out)
     missing = [v.name for v in variants if not (out / v.name / "findings.json").is_file()]
@@ -405,7 +405,7 @@ def summarize(
     results = {v.name: measure(out / v.name) for v in variants}
     with atomic_write(out / "sensitivity.json") as tmp:
         tmp.write_text(
-            json.dumps({"seed": seed, "variants": results}, indent=1) + "\n", encoding="utf-8"
+            json_text({"seed": seed, "variants": results}, indent=1) + "\n", encoding="utf-8"
         )
     figures = [
         values_figure(out / "figures", variants, results, DEFAULTS),

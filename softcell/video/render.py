@@ -302,14 +302,38 @@ def _check_render_arguments(**values: float) -> None:
             )
 
 
+def check_point(ds: xr.Dataset, point: dict[str, int], option: str = "point") -> None:
+    """Raise a one-line :class:`SoftcellError` unless ``point`` names sweep dimensions of
+    ``ds`` (those of ``bot_x`` before realization and time) with an index in range each; the
+    message names ``option``, the dimensions there are and each index's value."""
+    swept = ds["bot_x"].dims[:-2]
+    for dim, index in point.items():
+        if dim not in swept:
+            there = (
+                f"its sweep dimensions are {', '.join(swept)}"
+                if swept
+                else "the input is one parameter point, so there is no point to choose"
+            )
+            raise SoftcellError(f"{option} {dim}={index} is not allowed: {there}")
+        if not 0 <= index < ds.sizes[dim]:
+            values = ", ".join(f"{v:g}" for v in np.asarray(ds[dim].values, dtype=float))
+            unit = ds[dim].attrs.get("units", "")
+            raise SoftcellError(
+                f"{option} {dim}={index} is not allowed: an index from 0 to "
+                f"{ds.sizes[dim] - 1}, not a value ({dim} = {values} {unit}".rstrip()
+                + ")"
+            )
+
+
 def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None) -> xr.Dataset:
     """The one realization (of one sweep point) to render; a one-line error for an index out
     of range, a sweep without a chosen point, or a free bot."""
     validate(ds)
-    for dim, index in {**(point or {}), "realization": realization}.items():
-        if dim not in ds.sizes or not 0 <= index < ds.sizes[dim]:
-            allowed = f"0 .. {ds.sizes[dim] - 1}" if dim in ds.sizes else "not a dimension"
-            raise SoftcellError(f"{dim} index {index} is not allowed: {allowed}")
+    check_point(ds, point or {})
+    if not 0 <= realization < ds.sizes["realization"]:
+        raise SoftcellError(
+            f"realization index {realization} is not allowed: 0 .. {ds.sizes['realization'] - 1}"
+        )
     for dim in ds["bot_x"].dims[:-2]:
         if dim not in (point or {}):
             raise SoftcellError(
