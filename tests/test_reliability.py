@@ -878,3 +878,19 @@ def test_json_outputs_hold_no_nan():
     text = json_text({"a": float("nan"), "b": [np.float64("inf"), 1.5], "c": "x"})
     assert json.loads(text) == {"a": None, "b": [None, 1.5], "c": "x"}
     assert "NaN" not in text and "Infinity" not in text
+
+
+@pytest.mark.parametrize(
+    ("table", "words"),
+    [
+        ("[run]\nrealizations = 0", "realizations = 0 is not allowed: must be an integer >= 1"),
+        ("[run]\nseed = -1", "seed = -1 is not allowed"),
+        ("[analysis]\ndiscardd = 3", "unknown analysis option 'discardd' (did you mean"),
+    ],
+)
+def test_params_refuses_what_simulate_and_analyze_refuse(tmp_path, capsys, table, words):
+    # Before: `softcell params` printed the parameters, exit 0.
+    config = tmp_path / "run.toml"
+    config.write_text(table + "\n", encoding="utf-8")
+    line = one_line_exit_2(["params", str(config)], capsys)
+    assert words in line, line

@@ -57,13 +57,20 @@ def _add_params(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_params(args: argparse.Namespace) -> int:
+    from softcell.analysis.collective import split_crowd_options
+    from softcell.analysis.detector import split_options
+    from softcell.analysis.options import analysis_options
     from softcell.components.registry import check_in_use, check_point, default_registry
-    from softcell.model.limits import check_run
+    from softcell.model.limits import check_realizations, check_run, check_seed
 
     registry = default_registry()
     config = with_assembly_terms(_request(args))
     config.check_components(registry)
     check_in_use(config.parameters, registry, config.components)
+    # the checks simulate and analyze make of the [run] and [analysis] tables
+    check_realizations(config.run.get("realizations", 1))
+    check_seed(config.run.get("seed", 0))
+    analysis_options(split_options(split_crowd_options(config.analysis)[1], registry)[0])
     points = expand_sweep(
         config.parameters, list(registry.parameter_specs(config.components).values())
     )

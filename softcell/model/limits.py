@@ -148,6 +148,15 @@ def max_radius(contact_length: float) -> float:
     return contact_length / (CONTACT_RESOLUTION * 2.0**-52)
 
 
+def check_realizations(realizations: object) -> int:
+    """The realizations per point as an int >= 1, or a one-line error."""
+    if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
+        raise SoftcellError(
+            f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
+        )
+    return realizations
+
+
 def check_seed(seed: object) -> int:
     """The root seed as an int in 0 .. 2**64 - 1, or a one-line error."""
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:

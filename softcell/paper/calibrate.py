@@ -30,6 +30,7 @@ import numpy as np
 
 from softcell.errors import SoftcellError
 from softcell.model.configuration import RunConfig
+from softcell.model.limits import check_realizations
 from softcell.runner.points import check_worker_count
 
 #: Relative step in the parameter for the slope behind the uncertainty.
@@ -127,10 +128,7 @@ def _positive(name: str, values: Sequence[float], unit: str) -> list[float]:
 
 
 def _common(realizations: int, duration: float, settle: float, workers: int) -> None:
-    if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
-        raise SoftcellError(
-            f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
-        )
+    check_realizations(realizations)
     if not (math.isfinite(duration) and math.isfinite(settle) and 0 <= settle < duration):
         raise SoftcellError(
             f"the averaging window [{settle:g}, {duration:g}] s is empty: "

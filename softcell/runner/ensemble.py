@@ -26,7 +26,7 @@ from softcell.components.registry import (
 )
 from softcell.errors import ConfigError, SoftcellError
 from softcell.model.configuration import RunConfig, assembly_of, with_assembly_terms
-from softcell.model.limits import check_run, check_seed
+from softcell.model.limits import check_realizations, check_run, check_seed
 from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
@@ -71,10 +71,7 @@ def plan(
     list of Task
         Point-major order.
     """
-    if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:
-        raise SoftcellError(
-            f"realizations = {realizations!r} is not allowed: must be an integer >= 1"
-        )
+    check_realizations(realizations)
     check_seed(seed)
     config = with_assembly_terms(config)
     assembly = assembly_of(config)
