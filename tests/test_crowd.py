@@ -4,6 +4,7 @@ two passive cells relax symmetrically, a periodic box is its replica), and the c
 
 import importlib
 import math
+import re
 
 import numpy as np
 import pytest
@@ -468,3 +469,15 @@ def test_an_unknown_pair_term_is_one_line(tmp_path, capsys):
     assert main([*argv, "--cells", "2", "--pair-terms", "repulsion,glue"]) == 2
     err = capsys.readouterr().err
     assert "glue" in err and err.count("\n") == 1
+
+
+def test_a_plugin_pair_terms_flags_are_its_own(tmp_path, capsys):
+    # Before: "--adhesion-strength is a parameter of pair term 'adhesion', which this run
+    # does not use" although --pair-terms named it (the TOML route worked); params had no
+    # --cells or --pair-terms.
+    with registered(AdhesionPlugin):
+        argv = ["--cells", "2", "--pair-terms", "repulsion,adhesion", "--adhesion-strength", "2e-3"]
+        assert main(["params", "--radius", "4", *argv]) == 0
+        assert re.search(r"^adhesion_strength\s+0\.002\s+N cm", capsys.readouterr().out, re.M)
+        assert main(["params", "--radius", "4", "--cells", "2", "--adhesion-strength", "2e-3"]) == 2
+        assert "which this run does not use" in capsys.readouterr().err

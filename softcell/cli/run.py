@@ -11,6 +11,7 @@ from softcell.cli import flags
 from softcell.errors import SoftcellError
 from softcell.model.configuration import (
     RunConfig,
+    assembly_of,
     with_assembly_terms,
     with_obstacle_term,
 )
@@ -51,6 +52,7 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
 def _add_params(p: argparse.ArgumentParser) -> None:
     flags.config_file(p)
     flags.components(p)
+    flags.assembly(p)
     flags.parameters(p, list(MODEL_PARAMETERS.values()))
     flags.component_parameters(p, [spec for spec, _ in _component_specs(None).values()])
     p.set_defaults(func=_cmd_params, help_filter=_hide_unused)
@@ -66,14 +68,13 @@ def _cmd_params(args: argparse.Namespace) -> int:
     registry = default_registry()
     config = with_assembly_terms(_request(args))
     config.check_components(registry)
-    check_in_use(config.parameters, registry, config.components)
+    check_in_use(config.parameters, registry, _in_use(config))
     # the checks simulate and analyze make of the [run] and [analysis] tables
     check_realizations(config.run.get("realizations", 1))
     check_seed(config.run.get("seed", 0))
     analysis_options(split_options(split_crowd_options(config.analysis)[1], registry)[0])
-    points = expand_sweep(
-        config.parameters, list(registry.parameter_specs(config.components).values())
-    )
+    in_use = _in_use(config)
+    points = expand_sweep(config.parameters, list(registry.parameter_specs(in_use).values()))
     for _, params in points:
         check_run(params)
         # the checks simulate makes, so params accepts no less
@@ -161,7 +162,7 @@ def _request(args: argparse.Namespace) -> RunConfig:
     obstacles; a flag of a parameter of a component the run does not use is refused, naming
     that component."""
     config = with_obstacle_term(flags.run_config(args))
-    in_use = with_assembly_terms(config).components
+    in_use = _in_use(config)
     used = _component_specs(in_use)
     for name, (_, owner) in _component_specs(None).items():
         if name not in used and getattr(args, f"param_{name}", None) is not None:
@@ -172,11 +173,20 @@ def _request(args: argparse.Namespace) -> RunConfig:
     return config
 
 
+def _in_use(config: RunConfig) -> dict[str, Any]:
+    """The components ``config`` uses: its own, the assembly's terms (an arena's walls) and,
+    for many cells, the assembly's pair terms."""
+    in_use = dict(with_assembly_terms(config).components)
+    if config.assembly:
+        in_use["assembly"] = assembly_of(config).as_dict()
+    return in_use
+
+
 def _hide_unused(parser: argparse.ArgumentParser, namespace: argparse.Namespace) -> None:
     """Leave out of the help the parameters of the components that the flags before ``-h``
     (and the configuration file) do not choose."""
     try:
-        in_use = with_assembly_terms(with_obstacle_term(flags.run_config(namespace))).components
+        in_use = _in_use(with_obstacle_term(flags.run_config(namespace)))
     except SoftcellError:  # the help is still worth showing, with every parameter
         return
     used = _component_specs(in_use)

@@ -350,9 +350,12 @@ class Registry:
 
 
 def chosen(cls: type[Component], components: Mapping[str, Any]) -> bool:
-    """Whether ``components`` (names by kind, ``energy_terms`` a list) names ``cls``."""
+    """Whether ``components`` (names by kind, ``energy_terms`` a list) names ``cls``; the
+    pair terms are ``pair_terms``, or those of the ``assembly`` settings a file stores."""
     lists = {"energy_term": "energy_terms", "pair_term": "pair_terms"}
     names = components.get(lists.get(cls.kind, cls.kind))
+    if names is None and cls.kind == "pair_term":
+        names = (components.get("assembly") or {}).get("pair_terms")
     return cls.name in names if isinstance(names, list | tuple) else cls.name == names
 
 
