@@ -300,3 +300,22 @@ def test_a_run_that_diverges_with_finite_kernels_says_so():
         "every component's kernels are finite at the last finite state (t = 0 s) and just "
         "ahead of it: the integration itself diverged (reduce dt or tighten the tolerances)"
     )
+
+
+def test_check_component_reports_a_wrong_kernel_signature_as_a_violation():
+    # Before: a bare TypeError from numba ("No matching definition ...").
+    from softcell.testing import check_component
+
+    with pytest.raises(AssertionError, match=r"energy term 'short_term' breaks its contract:\n"
+                       r"- a kernel cannot be called as the contract calls it"):  # fmt: skip
+        check_component(ShortTerm)
+
+
+def test_check_component_reports_a_unit_that_is_no_unit():
+    # Before: check_component passed a component declaring "bananas" (registration skips it).
+    from fakeplugins.badunits import Bananas
+
+    from softcell.testing import check_component
+
+    with pytest.raises(AssertionError, match=r"parameter 'banana_level': .*bananas"):
+        check_component(Bananas)

@@ -269,3 +269,31 @@ def test_the_cli_refuses_a_bad_threshold_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "contact_threshold" in err[0]
     assert not os.path.exists(tmp_path / "x")
+
+
+@njit
+def nan_event(phase, data, sense, coefficients):
+    return math.nan
+
+
+class NaNEvent(Crossing):
+    name = "nan_event"
+    description = "an event kernel that returns NaN"
+
+    def event_kernel(self):
+        return nan_event
+
+
+def test_an_event_kernel_that_returns_nan_is_named_before_any_step():
+    # Before: the run ended with exit 0 and no events (NaN >= 0 is never true).
+    registry = registry_with(NaNEvent)
+    with pytest.raises(ContractError, match=r"event_kernel\(\) wrote non-finite event value"):
+        run(NaNEvent, "rodas4", True, registry)
+
+
+def test_check_driving_protocol_checks_the_event_kernel():
+    from softcell.testing import check_component
+
+    check_component(Crossing)
+    with pytest.raises(AssertionError, match=r"event_kernel\(\) returned nan"):
+        check_component(NaNEvent)

@@ -35,6 +35,30 @@ def _curve(modes: np.ndarray, n: int) -> list[np.ndarray]:
     return [np.ascontiguousarray(p) for z in curve(modes, n) for p in (z.real, z.imag)]
 
 
+def _sense(model: Model, modes: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """What the bot senses (:class:`~softcell.components.contracts.Sense`) at this state, at
+    t = 0 s and the start of a phase: its pose, the force and torque of the energy terms on
+    it, and its distance to the membrane's curve at its nodes (inf for a free bot)."""
+    from softcell.components.contracts import SENSE_SIZE
+    from softcell.engine.reference import force_modes
+
+    sense = np.zeros(SENSE_SIZE)
+    sense[:3] = pose
+    load = np.zeros(3)
+    sense[6] = np.inf
+    if model.has_membrane:
+        _, dpose = force_modes(model, modes, pose)
+        load += 2 * np.pi / model.nodes * dpose
+        x, y = _curve(modes, model.nodes)[:2]
+        sense[6] = float(np.min(np.hypot(x - pose[0], y - pose[1])))
+    for term in model.bot_terms:
+        dpose = np.zeros(3)
+        term.bot_kernel()(pose, model.context, np.ascontiguousarray(term.coefficients()), dpose)
+        load += dpose
+    sense[3:6] = -load
+    return sense
+
+
 def _evaluations(
     model: Model, modes: np.ndarray, pose: np.ndarray, phase: int, datum: float
 ) -> Iterator[tuple[Component, str, tuple[str, ...], Callable[[], list[np.ndarray]]]]:
@@ -87,6 +111,14 @@ def _evaluations(
         return [out]
 
     yield model.protocol, "drive_kernel", ("force and torque",), drive
+    if model.event is not None:
+
+        def event():
+            sense = _sense(model, modes, pose)
+            value = model.event(np.int8(phase), float(datum), sense, model.drive_coefficients)
+            return [np.array([value])]
+
+        yield model.protocol, "event_kernel", ("event value",), event
     if model.nonlinear_friction:
         yield from _friction_evaluations(model, modes, pose)
 

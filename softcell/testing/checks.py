@@ -32,6 +32,7 @@ Example (in a plugin's tests)::
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -39,10 +40,12 @@ from typing import Any
 import numpy as np
 
 from softcell.components.contracts import (
+    SENSE_SIZE,
     DrivingProtocol,
     EnergyTerm,
     FrictionLaw,
     PairTerm,
+    Sense,
     StopGoDetector,
     kind_name,
 )
@@ -62,6 +65,9 @@ def _context(params: Parameters) -> tuple[float, np.ndarray]:
 
 
 def _build(cls: type, values: Mapping[str, Any] | None):
+    """The component with ``values``, once its class is well formed (its name, description,
+    methods and the units of its parameters, which registration checks too)."""
+    _fail(cls, cls.contract_problems())
     params = Parameters(dict(values or {}), cls.parameters)
     return cls(params), params
 
@@ -72,6 +78,28 @@ def _fail(component: type, problems: list[str]) -> None:
             f"{kind_name(component.kind)} {component.name!r} breaks its contract:\n- "
             + "\n- ".join(problems)
         )
+
+
+def _contract_calls(check: Callable[..., None]) -> Callable[..., None]:
+    """``check`` with a kernel that cannot be called as the contract calls it (numba's
+    ``TypeError``: another signature) reported as the violation it is."""
+
+    @functools.wraps(check)
+    def checked(cls: type, *args: Any, **kwargs: Any) -> None:
+        try:
+            return check(cls, *args, **kwargs)
+        except TypeError as exc:
+            signatures = "; ".join(f"{k}: {v}" for k, v in getattr(cls, "kernels", {}).items())
+            _fail(
+                cls,
+                [
+                    "a kernel cannot be called as the contract calls it ("
+                    + " ".join(str(exc).split())
+                    + f"); the contract's signatures: {signatures}"
+                ],
+            )
+
+    return checked
 
 
 def _close(a: np.ndarray, b: np.ndarray, rtol: float, floor: float) -> tuple[bool, float]:
@@ -110,6 +138,7 @@ def _partials(term: EnergyTerm, w, pose, context, coef) -> tuple[np.ndarray, np.
     return np.array(out), dpose
 
 
+@_contract_calls
 def check_energy_term(
     cls: type[EnergyTerm],
     values: Mapping[str, Any] | None = None,
@@ -288,6 +317,7 @@ def _bot_kernels(term, pose, context, coef, radius, rtol) -> list[str]:
 # -- friction laws ---------------------------------------------------------------------------
 
 
+@_contract_calls
 def check_friction_law(
     cls: type[FrictionLaw],
     values: Mapping[str, Any] | None = None,
@@ -381,6 +411,7 @@ def check_friction_law(
 # -- driving protocols -----------------------------------------------------------------------
 
 
+@_contract_calls
 def check_driving_protocol(
     cls: type[DrivingProtocol],
     values: Mapping[str, Any] | None = None,
@@ -447,7 +478,24 @@ def check_driving_protocol(
                 problems.append(f"drive_kernel() wrote a non-finite value in phase {phase}")
                 break
             problems += _drive_smoothness(drive, phase, datum, pose, context[0], value, rtol)
+    problems += _event_values(protocol, seen, context[0], coef)
     _fail(cls, problems)
+
+
+def _event_values(protocol, seen: dict, l0: float, coef: np.ndarray) -> list[str]:
+    """The event kernel (if any) in each phase, at the bot's start in a ring of
+    circumference ``l0`` (cm) at rest: its value must be finite."""
+    event = protocol.event_kernel()
+    if event is None:
+        return []
+    sense = np.zeros(SENSE_SIZE)
+    sense[Sense.DISTANCE] = l0 / (2 * math.pi)
+    problems = []
+    for phase, datum in sorted(seen.items()):
+        value = event(np.int8(phase), float(datum), sense, coef)
+        if not math.isfinite(value):
+            problems.append(f"event_kernel() returned {value!r} in phase {phase} at the start")
+    return problems
 
 
 def _drive_smoothness(drive: Callable, phase, datum, pose, l0, value, rtol) -> list[str]:
@@ -477,6 +525,7 @@ def _drive_smoothness(drive: Callable, phase, datum, pose, l0, value, rtol) -> l
 # -- stop/go detectors -----------------------------------------------------------------------
 
 
+@_contract_calls
 def check_stopgo_detector(
     cls: type[StopGoDetector],
     values: Mapping[str, Any] | None = None,
@@ -545,6 +594,7 @@ def check_stopgo_detector(
     _fail(cls, list(dict.fromkeys(problems)))
 
 
+@_contract_calls
 def check_pair_term(
     cls: type[PairTerm],
     values: Mapping[str, Any] | None = None,
