@@ -131,3 +131,34 @@ def test_a_run_configuration_naming_some_kinds_takes_the_defaults_for_the_others
     config = RunConfig(components={"integrator": "explicit_euler"})
     assert config.components == {**DEFAULT_COMPONENTS, "integrator": "explicit_euler"}
     config.check_components(default_registry())
+
+
+def test_the_trap_recipe_of_the_plugin_guide_holds_the_bot(tmp_path, monkeypatch):
+    # docs/plugins.md: "A trap on the bot's centre", run as it is written there.
+    import sys
+
+    import numpy as np
+    import xarray as xr
+
+    from softcell.cli import main
+    from softcell.plugin import registered
+    from softcell.testing import check_component
+
+    text = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text(encoding="utf-8")
+    (block,) = re.findall(r"\*A trap on the bot's centre\*.*?```python\n(.*?)```", text, re.S)
+    (tmp_path / "trap_recipe.py").write_text(block, encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = __import__("trap_recipe")
+    assert isinstance(module, types.ModuleType) and "trap_recipe" in sys.modules
+    check_component(module.Trap)
+    common = ["simulate", "--radius", "5", "--duration", "20", "--quiet"]
+    with registered(module):
+        terms = ["--energy-terms", "bending,tension,contact,trap", "--trap-stiffness", "0.01"]
+        assert main([*common, *terms, "-o", str(tmp_path / "trapped")]) == 0
+    assert main([*common, "-o", str(tmp_path / "free")]) == 0
+
+    def distance(folder):
+        with xr.open_dataset(folder / "point000_realization0000.nc") as ds:
+            return float(np.hypot(ds.bot_x, ds.bot_y).mean())
+
+    assert distance(tmp_path / "trapped") < 2.0 < 5.0 < distance(tmp_path / "free")
