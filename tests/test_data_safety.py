@@ -847,3 +847,15 @@ def test_a_second_request_reuses_only_identical_files_or_stops(world, second):
         if same_settings and t.realization == 0 and made.get(t.point) == second["radius"][t.point]
     )
     assert resume.reused == expected
+
+
+def test_simulate_says_which_files_it_reused(tmp_path, capsys):
+    # Before: a rerun said "3 files in OUT" whether it computed them or found them there.
+    out = tmp_path / "run"
+    assert main(["simulate", "--radius", "4", *SMALL, "--realizations", "2", "-o", str(out)]) == 0
+    assert "reused" not in capsys.readouterr().err
+    assert main(["simulate", "--radius", "4", *SMALL, "--realizations", "3", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"2 of 3 file(s) in {out} already hold this request: reused as they are; computing 1" in err
+    )

@@ -358,6 +358,11 @@ def _run(
     _say_removals(resume, out, log)
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     todo = resume.todo
+    if log and resume.reused:
+        log(
+            f"{resume.reused} of {len(tasks)} file(s) in {out} already hold this request: "
+            f"reused as they are; computing {len(todo)}"
+        )
     with _progress_bar(todo, progress) as bar:
         if client is not None:
             run_on_cluster(todo, client, bar.update, checkpoint_every)
