@@ -354,7 +354,7 @@ class Parameters(Mapping[str, Value]):
     def __init__(
         self, values: Mapping[str, Any] | None = None, extra_specs: Iterable[ParameterSpec] = ()
     ) -> None:
-        specs = merge_specs(MODEL_PARAMETERS.values(), extra_specs)
+        specs = dict(_with_model_parameters(tuple(extra_specs)))
         given = {k: v for k, v in (values or {}).items() if v is not None}
         unknown = [k for k in given if k not in specs]
         if unknown:
@@ -444,6 +444,13 @@ class Parameters(Mapping[str, Value]):
         return cls(values, extra_specs)
 
 
+@functools.lru_cache(maxsize=64)
+def _with_model_parameters(extra: tuple[ParameterSpec, ...]) -> dict[str, ParameterSpec]:
+    """:func:`merge_specs` of the model's parameters and ``extra``, made once per set of
+    declarations (a sweep builds one :class:`Parameters` per point); callers copy it."""
+    return merge_specs(MODEL_PARAMETERS.values(), extra)
+
+
 def merge_specs(*groups: Iterable[ParameterSpec]) -> dict[str, ParameterSpec]:
     """Union of parameter declarations; one name declared two different ways is an error."""
     merged: dict[str, ParameterSpec] = {}
@@ -499,8 +506,15 @@ def expand_sweep(
         if not options:
             raise ConfigError(f"parameter {name!r} is swept over an empty list")
         spec = merge_specs(MODEL_PARAMETERS.values(), extra_specs).get(name)
-        seen = [spec.coerce(v) if spec is not None else v for v in options]
-        twice = next((v for v in seen if seen.count(v) > 1), None)
+        seen: set[Any] = set()
+        twice = None
+        for value in options:
+            value = spec.coerce(value) if spec is not None else value
+            key = json.dumps(value, sort_keys=True) if isinstance(value, list | dict) else value
+            if key in seen:
+                twice = value
+                break
+            seen.add(key)
         if twice is not None:
             raise ConfigError(
                 f"parameter {name!r} is swept over {options} with {twice} twice: each value "

@@ -26,7 +26,7 @@ from softcell.components.registry import (
 )
 from softcell.errors import ConfigError, SoftcellError
 from softcell.model.configuration import RunConfig, assembly_of, with_assembly_terms
-from softcell.model.limits import check_realizations, check_run, check_seed
+from softcell.model.limits import check_realizations, check_run, check_seed, human_bytes
 from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
@@ -338,6 +338,10 @@ def _say_removals(resume, out: Path, log: Callable[[str], None] | None) -> None:
         )
 
 
+#: From this many realizations, a run says what it is about to compute and store.
+LARGE_RUN = 100
+
+
 def _run(
     tasks: list[Task],
     out: Path,
@@ -358,6 +362,13 @@ def _run(
     _say_removals(resume, out, log)
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     todo = resume.todo
+    if log and len(todo) >= LARGE_RUN:
+        points = len({t.point for t in todo})
+        log(
+            f"{len(todo)} realizations to compute ({points} parameter points), about "
+            f"{human_bytes(expected_bytes(todo))} of files in {out}; Ctrl-C stops, a rerun "
+            "resumes"
+        )
     if log and resume.reused:
         log(
             f"{resume.reused} of {len(tasks)} file(s) in {out} already hold this request: "
