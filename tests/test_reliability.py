@@ -168,6 +168,11 @@ def test_the_library_names_a_wrong_argument(tmp_path, call, words):
         (["reproduce", "--quick", "-o", "S", "--workers", "1000"], "(4 per core)"),
         (["calibrate", "--push-speed", "0.1", "--workers", "1000"], "(4 per core)"),
         (["simulate", "--radius", "4", "-o", "S", "--workers", "two"], "not a whole number"),
+        # before: ran, with positions at 2.5e11 cm and a ring's roundness 1e-5 (not 1e-14)
+        (
+            ["simulate", "--radius", "4", "-o", "S", "--cells", "2", "--box", "1e12"],
+            "at most 1e+06 cm for boundary periodic",
+        ),
         # before: ZeroDivisionError, a math domain error, a 14.6 TiB allocation
         *(
             (
@@ -894,3 +899,27 @@ def test_params_refuses_what_simulate_and_analyze_refuse(tmp_path, capsys, table
     config.write_text(table + "\n", encoding="utf-8")
     line = one_line_exit_2(["params", str(config)], capsys)
     assert words in line, line
+
+
+def test_an_assembly_beyond_the_process_memory_limit_is_refused_at_once(tmp_path):
+    # Before: under a 6 GB address-space limit, a MemoryError traceback after 85 s (the
+    # estimate took the machine's memory, and the placement held all M x M pairs).
+    import resource
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (6 * 10**9, resource.RLIM_INFINITY))
+
+    argv = ["simulate", "--cells", "12000", "--radius", "4", "--duration", "1"]
+    run = subprocess.run(
+        [sys.executable, "-m", "softcell", *argv, "-o", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        preexec_fn=limited,
+        timeout=120,
+    )
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.startswith("softcell: error: parameter cells = 12000 is not allowed")
+    assert "Traceback" not in run.stderr
+    if os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") > 6 * 10**9:
+        assert "more than 50% of 5.59 GiB" in run.stderr, run.stderr  # the limit, not the RAM
+    assert not (tmp_path / "out").exists()

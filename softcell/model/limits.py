@@ -32,11 +32,29 @@ CONTACT_RESOLUTION = 1e4
 
 
 def machine_memory() -> int:
-    """Physical memory of this machine (bytes)."""
+    """The memory this process may use (bytes): the machine's physical memory, or less where
+    the process's address-space limit (``ulimit -v``) or its control group's limit (a batch
+    job's, a container's) says so."""
     try:
-        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+        found = [int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))]
     except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
-        return 8 << 30
+        found = [8 << 30]
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft != resource.RLIM_INFINITY and soft > 0:
+            found.append(int(soft))
+    except (ImportError, OSError, ValueError):  # pragma: no cover - not POSIX
+        pass
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            text = open(path, encoding="ascii").read().strip()  # noqa: SIM115
+        except OSError:
+            continue
+        if text.isdigit() and 0 < int(text) < found[0]:
+            found.append(int(text))
+    return min(found)
 
 
 def human_bytes(n: float) -> str:
