@@ -244,7 +244,7 @@ BAD = [
     ),
     (
         ["render", "W/sim", "--point", "radius=7", "-o", "W/out.mkv"],
-        ["radius index 7 is not allowed: 0 .. 1"],
+        ["point radius=7 is not allowed: an index from 0 to 1, not a value (radius = 4, 5 cm)"],
     ),
 ]
 
