@@ -439,11 +439,14 @@ def test_a_film_made_in_memory_is_the_rendered_film_tracked(data, films):
     assert json.loads(made.attrs["softcell_video"].split(": ", 1)[1])["seed"] == 8
 
 
-def test_several_films_are_the_realizations_of_their_radius(films):
+def test_several_films_are_the_realizations_of_their_radius(films, tmp_path):
+    import shutil
+
     from softcell.io.netcdf import open_inputs
 
     _, tracked = films
-    ds = open_inputs([tracked[1], tracked[0], tracked[1]])
+    copy = shutil.copy(tracked[1], tmp_path / "copy_of_tracked1.nc")  # one file twice: refused
+    ds = open_inputs([tracked[1], tracked[0], copy])
     assert ds["realization"].values.tolist() == [0, 1, 2]
     np.testing.assert_array_equal(ds["cell_x"].values[0], ds["cell_x"].values[2])
     assert ds.attrs["softcell_videos"] == '["cell1.mkv", "cell0.mkv", "cell1.mkv"]'

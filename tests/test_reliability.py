@@ -610,8 +610,8 @@ def test_a_study_folder_is_kept_for_its_own_study_and_seed(tmp_path):
 
 def test_the_library_bounds_local_workers(tmp_path):
     from softcell.model.configuration import RunConfig
+    from softcell.model.limits import WORKERS_PER_CORE, cores
     from softcell.runner.ensemble import simulate
-    from softcell.runner.points import WORKERS_PER_CORE, cores
 
     too_many = WORKERS_PER_CORE * cores() + 1
     with pytest.raises(SoftcellError, match=f"workers = {too_many} is not allowed: this machine"):

@@ -352,7 +352,7 @@ def check_workers(value: int | None) -> int:
 def _worker_count(text: str) -> int:
     """The ``--workers`` flag's value, checked as it is parsed (before a study marks its
     folder or a run plans anything)."""
-    from softcell.runner.points import check_worker_count
+    from softcell.model.limits import check_worker_count
 
     try:
         value = int(text)

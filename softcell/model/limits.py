@@ -166,6 +166,38 @@ def max_radius(contact_length: float) -> float:
     return contact_length / (CONTACT_RESOLUTION * 2.0**-52)
 
 
+#: Local worker processes per core, at most: more only share the cores and the memory.
+WORKERS_PER_CORE = 4
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def check_worker_count(workers: object, name: str = "workers") -> int:
+    """``workers`` local worker processes, checked: an integer from 1 to
+    :data:`WORKERS_PER_CORE` per core of this machine.
+
+    Raises
+    ------
+    SoftcellError
+        One line naming the value (as ``name``) and the bound.
+    """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SoftcellError(f"{name} = {workers!r} is not allowed: must be an integer >= 1")
+    most = WORKERS_PER_CORE * cores()
+    if workers > most:
+        raise SoftcellError(
+            f"{name} = {workers} is not allowed: this machine has {cores()} core(s), so at "
+            f"most {most} local workers ({WORKERS_PER_CORE} per core); for more, run on a "
+            "dask.distributed cluster (--scheduler ADDRESS)"
+        )
+    return workers
+
+
 def check_realizations(realizations: object) -> int:
     """The realizations per point as an int >= 1, or a one-line error."""
     if isinstance(realizations, bool) or not isinstance(realizations, int) or realizations < 1:

@@ -30,8 +30,7 @@ import numpy as np
 
 from softcell.errors import SoftcellError
 from softcell.model.configuration import RunConfig
-from softcell.model.limits import check_realizations
-from softcell.runner.points import check_worker_count
+from softcell.model.limits import check_realizations, check_worker_count
 
 #: Relative step in the parameter for the slope behind the uncertainty.
 SLOPE_STEP = 0.03

@@ -26,11 +26,16 @@ from softcell.components.registry import (
 )
 from softcell.errors import ConfigError, SoftcellError
 from softcell.model.configuration import RunConfig, assembly_of, with_assembly_terms
-from softcell.model.limits import check_realizations, check_run, check_seed, human_bytes
+from softcell.model.limits import (
+    check_realizations,
+    check_run,
+    check_seed,
+    check_worker_count,
+    human_bytes,
+)
 from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
-from softcell.runner.points import check_worker_count
 from softcell.runner.resume import expected_bytes, resume_plan
 from softcell.runner.tasks import STOP_FILE, Task, component_code, run_task, stored_components
 from softcell.settings import CHECKPOINT_EVERY

@@ -9,44 +9,13 @@ resumable as ``softcell simulate``'s runs are.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
 from softcell.errors import SoftcellError
-
-#: Local worker processes per core, at most: more only share the cores and the memory.
-WORKERS_PER_CORE = 4
-
-
-def cores() -> int:
-    """The cores this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
-
-
-def check_worker_count(workers: Any, name: str = "workers") -> int:
-    """``workers`` local worker processes, checked: an integer from 1 to
-    :data:`WORKERS_PER_CORE` per core of this machine.
-
-    Raises
-    ------
-    SoftcellError
-        One line naming the value (as ``name``) and the bound.
-    """
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SoftcellError(f"{name} = {workers!r} is not allowed: must be an integer >= 1")
-    most = WORKERS_PER_CORE * cores()
-    if workers > most:
-        raise SoftcellError(
-            f"{name} = {workers} is not allowed: this machine has {cores()} core(s), so at "
-            f"most {most} local workers ({WORKERS_PER_CORE} per core); for more, run on a "
-            "dask.distributed cluster (--scheduler ADDRESS)"
-        )
-    return workers
+from softcell.model.limits import check_worker_count, cores
 
 
 def worker_count(workers: int | None, scheduler: str | None) -> int | None:

@@ -125,7 +125,10 @@ def test_a_placement_that_cannot_fit_says_why():
     ("make", "message"),
     [
         (lambda: Domain("torus", 10.0), r"boundary = 'torus' .* must be one of open, walls"),
-        (lambda: Domain("walls"), r"box = None cm .* must be finite and > 0 cm for boundary"),
+        (
+            lambda: Domain("walls"),
+            r"box = None cm .* must be > 0 cm and at most 1e\+06 cm for boundary",
+        ),
         (lambda: Domain("open", 10.0), r"box = 10.0 cm .* must be unset for the open plane"),
         (lambda: Domain("periodic", float("inf")), r"box = inf cm"),
         (
