@@ -923,3 +923,15 @@ def test_an_assembly_beyond_the_process_memory_limit_is_refused_at_once(tmp_path
     if os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") > 6 * 10**9:
         assert "more than 50% of 5.59 GiB" in run.stderr, run.stderr  # the limit, not the RAM
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("suffix", [".gif", ".mp4"])
+def test_track_refuses_an_animation(one_run, tmp_path, capsys, suffix):
+    # Before: track took animate's two-panel GIF for a cell ("26 frames tracked").
+    out, _, _ = one_run
+    movie = tmp_path / f"movie{suffix}"
+    assert main(["animate", str(out), "-o", str(movie), "--quiet"]) == 0
+    capsys.readouterr()
+    line = one_line_exit_2(["track", str(movie), "-o", str(tmp_path / "t.nc")], capsys)
+    assert ("is a GIF" if suffix == ".gif" else "is an animation of a simulation") in line, line
+    assert not (tmp_path / "t.nc").exists()

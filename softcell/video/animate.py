@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from softcell._version import __version__
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.model.obstacle_layout import Post, parse_obstacles
@@ -26,6 +27,10 @@ from softcell.schema import validate
 
 #: What each suffix is written as: (codec, pixel format).
 FORMATS = {".mp4": ("libx264", "yuv420p"), ".gif": ("gif", "rgb8")}
+
+#: The start of the comment written into an MP4's metadata (GIF keeps none), by which
+#: ``softcell track`` knows an animation from a film.
+ANIMATION_MARK = "softcell animate"
 #: Panels side by side, at most.
 MAX_PANELS = 4
 GO_COLOUR, STOP_COLOUR = "#1f77b4", "#ff7f0e"
@@ -194,6 +199,7 @@ def _encode(scene, times, path: Path, how: tuple, fps: float, progress: bool):
     width, height = scene.size
     with atomic_write(path) as tmp:
         container = av.open(str(tmp), "w", format="mp4" if codec == "libx264" else "gif")
+        container.metadata["comment"] = f"{ANIMATION_MARK} {__version__}"  # track refuses it
         stream = container.add_stream(codec, rate=Fraction(fps).limit_denominator(1000))
         stream.width, stream.height, stream.pix_fmt = width, height, pixels
         if codec == "libx264":

@@ -23,6 +23,7 @@ import xarray as xr
 
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write, no_input
+from softcell.video.animate import ANIMATION_MARK
 from softcell.video.calibration import CalibrationError, calibrate_from_plate
 from softcell.video.tracker import (
     DARK_FRACTION,
@@ -44,6 +45,30 @@ def codec(path: Path) -> str:
     if suffix == ".mp4":
         return "mp4v"
     raise SoftcellError(f"video file {path} must end in .mkv or .avi (lossless) or .mp4")
+
+
+def _check_film(path: Path) -> None:
+    """Refuse what is no film of a cell: a GIF (256 colours, frame times in hundredths of a
+    second) and a movie that ``softcell animate`` made (its panels are drawings of a
+    simulation; it says so in its metadata)."""
+    if path.suffix.lower() == ".gif":
+        raise SoftcellError(
+            f"{path} is a GIF: an animation format (256 colours, frame times in hundredths of "
+            "a second), not a film to track; track the camera's video, or one that softcell "
+            "render made (.mkv, .avi, .mp4)"
+        )
+    try:
+        import av
+
+        with av.open(str(path)) as container:
+            comment = str(container.metadata.get("comment", ""))
+    except Exception:  # unreadable here: OpenCV's reader says why below
+        return
+    if comment.startswith(ANIMATION_MARK):
+        raise SoftcellError(
+            f"{path} is an animation of a simulation ({comment}), not a film to track; "
+            "film a realization with softcell render, then track that"
+        )
 
 
 def count_frames(path: str | os.PathLike[str]) -> int:
@@ -180,6 +205,7 @@ def track(
         not found.
     """
     video = Path(video)
+    _check_film(Path(video))
     _check_track_arguments(video, px_per_cm, arena_size, origin, fps, nodes, radius)
     _check_camera_arguments(
         px_per_cm,
