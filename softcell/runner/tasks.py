@@ -68,7 +68,8 @@ class Task:
     code : dict
         Each component in use (``"code of KIND NAME"``): where it came from (its
         distribution and version) and a digest of its package's code
-        (:func:`component_code`). A file made with other code is another request.
+        (``component_code`` in this module). A file made with other code is
+        another request.
     assembly : dict, optional
         Many cells (:meth:`softcell.model.assembly.Assembly.as_dict`); None for one cell.
     """
