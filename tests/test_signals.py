@@ -65,8 +65,9 @@ def _two_signals(out: Path, rng: random.Random) -> tuple[str, subprocess.Complet
     return "", subprocess.CompletedProcess(process.args, process.returncode, "", err)
 
 
-def _problem(out: Path, rng: random.Random) -> str:
-    hung, run = _two_signals(out, rng)
+def _problem(out: Path, hung: str, run: subprocess.CompletedProcess | None) -> str:
+    """What is wrong with a run stopped by two signals (read in the main thread: netCDF's
+    library is not safe to open files from two threads at once)."""
     if hung:
         return hung
     assert run is not None
@@ -89,7 +90,8 @@ def _pairs(tmp_path: Path, count: int, seed: int) -> list[str]:
     seeds = random.Random(seed)
     rngs = [random.Random(seeds.getrandbits(32)) for _ in range(count)]
     with ThreadPoolExecutor(2) as pool:
-        found = pool.map(lambda i: _problem(tmp_path / f"run{i}", rngs[i]), range(count))
+        runs = list(pool.map(lambda i: _two_signals(tmp_path / f"run{i}", rngs[i]), range(count)))
+    found = [_problem(tmp_path / f"run{i}", *runs[i]) for i in range(count)]
     return [f"pair {i}: {p}" for i, p in enumerate(found) if p]
 
 
