@@ -869,7 +869,9 @@ def analyze(
             "softcell.open_dataset)"
         )
     from softcell.analysis import collective as crowd
+    from softcell.schema import refuse_several_bots
 
+    refuse_several_bots(ds, "analyze")
     collective, options = crowd.split_crowd_options(options)
     if "cell" in ds.dims:
         return crowd.analyze_assembly(

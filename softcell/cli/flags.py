@@ -230,6 +230,36 @@ def assembly(p: argparse.ArgumentParser) -> None:
     )
 
 
+def bots(p: argparse.ArgumentParser) -> None:
+    """The ``[bots]`` settings as flags: several bots in one ring."""
+    group = p.add_argument_group(
+        "bots", "several bots in one ring, each with its own drive, schedule and stream"
+    )
+    group.add_argument(
+        "--bots", dest="bots_count", type=int, metavar="K", help="number of bots (default 1)"
+    )
+    group.add_argument(
+        "--bot-placement",
+        dest="bots_placement",
+        choices=("random", "ring", "lattice"),
+        help="starting places: at random without overlap (default), a ring of starting "
+        "points, or a lattice",
+    )
+    group.add_argument(
+        "--bot-gap",
+        dest="bots_gap",
+        type=float,
+        metavar="CM",
+        help="smallest starting gap between bots and to the ring (cm, default 0.5)",
+    )
+    group.add_argument(
+        "--bot-interactions",
+        dest="bots_interactions",
+        metavar="A,B",
+        help="how the bots meet: comma-separated bot interactions (default bot_repulsion)",
+    )
+
+
 # -- reading them back ------------------------------------------------------------------------
 
 
@@ -254,8 +284,22 @@ def run_config(args: argparse.Namespace) -> RunConfig:
             raise SoftcellError("--obstacles and --obstacle / --wall both place obstacles: use one")
         values["obstacles"] = placed
     return base.updated(
-        parameters=values, assembly=_assembly(args), components=_component_choice(args)
+        parameters=values,
+        assembly=_assembly(args),
+        components=_component_choice(args),
+        bots=_bots(args),
     )
+
+
+def _bots(args: argparse.Namespace) -> dict[str, Any]:
+    found = {
+        key: getattr(args, f"bots_{key}")
+        for key in ("count", "placement", "gap", "interactions")
+        if getattr(args, f"bots_{key}", None) is not None
+    }
+    if "interactions" in found:
+        found["interactions"] = [n.strip() for n in found["interactions"].split(",")]
+    return found
 
 
 def _assembly(args: argparse.Namespace) -> dict[str, Any]:

@@ -12,6 +12,7 @@ from softcell.errors import SoftcellError
 from softcell.model.configuration import (
     RunConfig,
     assembly_of,
+    bots_of,
     with_assembly_terms,
     with_obstacle_term,
 )
@@ -53,6 +54,7 @@ def _add_params(p: argparse.ArgumentParser) -> None:
     flags.config_file(p)
     flags.components(p)
     flags.assembly(p)
+    flags.bots(p)
     flags.parameters(p, list(MODEL_PARAMETERS.values()))
     flags.component_parameters(p, [spec for spec, _ in _component_specs(None).values()])
     p.set_defaults(func=_cmd_params, help_filter=_hide_unused)
@@ -105,6 +107,7 @@ def _add_simulate(p: argparse.ArgumentParser) -> None:
     flags.components(p)
     p.add_argument("--free-bot", action="store_true", help="no membrane: the free bot")
     flags.assembly(p)
+    flags.bots(p)
     flags.overwrite(
         p,
         "recompute files in OUT made with other settings (and remove "
@@ -179,6 +182,9 @@ def _in_use(config: RunConfig) -> dict[str, Any]:
     in_use = dict(with_assembly_terms(config).components)
     if config.assembly:
         in_use["assembly"] = assembly_of(config).as_dict()
+    several = bots_of(config)
+    if several is not None:
+        in_use["bots"] = several.as_dict()
     return in_use
 
 

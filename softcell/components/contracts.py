@@ -606,6 +606,42 @@ class PairTerm(Component):
         searched for, within the largest reach of the terms in use."""
 
 
+class BotInteraction(Component):
+    """How two bots in one ring act on each other (``--bots K`` > 1): generalized forces on
+    both bots from their two poses. The built-in ``bot_repulsion`` is a soft repulsion of the
+    ellipses' gap; a plugin adds alignment (a torque toward the other's heading), say, as one
+    more interaction (docs/plugins.md). The engine applies each pair's forces with the bots'
+    mobilities, and takes their Jacobian by central differences of the kernel (steps 1e-7 of
+    l0 / 2 pi in x and y, 1e-7 rad in the heading).
+    """
+
+    kind = "bot_interaction"
+    kernels = {"pair_kernel": f"void({VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, {VECTOR})"}
+
+    @abstractmethod
+    def pair_kernel(self) -> Callable[..., None]:
+        """Return the compiled (``numba.njit``) kernel of the interaction.
+
+        Kernel signature::
+
+            kernel(pose_a, pose_b, context, coefficients, out) -> None
+
+        ``pose_a``, ``pose_b``: float64[3], the two bots' x, y (cm) and heading (rad);
+        ``context``: float64[3], (l0, a, b) in cm; ``coefficients``: float64[:], from
+        :meth:`Component.coefficients`. The kernel *adds* the generalized forces on bot a
+        (N, N, N cm: force x, y and the torque about its centre) into ``out[0:3]`` and those
+        on bot b into ``out[3:6]``. An interaction that conserves momentum has out[0:2] =
+        -out[3:5] and, about the origin, x_a F_ya - y_a F_xa + tau_a + (the same for b) = 0;
+        the tests check the built-in's. It must not allocate, and must add nothing when the
+        bots' centres are farther apart than :meth:`reach`.
+        """
+
+    @abstractmethod
+    def reach(self) -> float:
+        """The distance (cm) between the bots' centres beyond which the kernel adds nothing:
+        pairs farther apart are not visited."""
+
+
 CONTRACTS: dict[str, type[Component]] = {
     "softcell_energy_terms": EnergyTerm,
     "softcell_driving_protocols": DrivingProtocol,
@@ -613,6 +649,7 @@ CONTRACTS: dict[str, type[Component]] = {
     "softcell_integrators": Integrator,
     "softcell_stopgo_detectors": StopGoDetector,
     "softcell_pair_terms": PairTerm,
+    "softcell_bot_interactions": BotInteraction,
 }
 
 
@@ -706,6 +743,8 @@ class Model:
     event : callable or None
         The protocol's compiled event kernel (:meth:`DrivingProtocol.event_kernel`; its value
         in the unit the protocol chooses, >= 0 ends the phase), or None.
+    bot_interactions : list of BotInteraction
+        How the bots of one ring act on each other (``--bots K`` > 1; none for one bot).
     """
 
     params: Parameters
@@ -731,6 +770,14 @@ class Model:
     pair_terms: list[PairTerm] = field(default_factory=list)
     #: The protocol's compiled event kernel, or None (:meth:`DrivingProtocol.event_kernel`).
     event: Callable[..., float] | None = None
+    #: How the bots of one ring act on each other (none for one bot).
+    bot_interactions: list[BotInteraction] = field(default_factory=list)
+
+    @property
+    def bot_reach(self) -> float:
+        """The distance (cm) between bots' centres within which they interact: the largest
+        reach of the bot interactions (0 without any)."""
+        return max((i.reach() for i in self.bot_interactions), default=0.0)
 
     @property
     def pair_reach(self) -> float:

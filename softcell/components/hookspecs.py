@@ -18,6 +18,7 @@ import pluggy
 
 if TYPE_CHECKING:
     from softcell.components.contracts import (
+        BotInteraction,
         DrivingProtocol,
         EnergyTerm,
         FrictionLaw,
@@ -131,6 +132,23 @@ def softcell_pair_terms() -> list[type[PairTerm]]:
         cell's membrane, its first two derivatives (N, N cm^-1) in a compiled kernel, and
         the distance beyond which it vanishes (cm). An assembly chooses its terms by name
         (``pair_terms`` in ``[assembly]``, ``--pair-terms``; default ``repulsion``).
+
+    Called once when the registry is built.
+    """
+
+
+@hookspec
+def softcell_bot_interactions() -> list[type[BotInteraction]]:
+    """Interactions between the bots of one ring (``--bots K`` > 1) this plugin provides.
+
+    Returns
+    -------
+    list of type
+        Subclasses of :class:`softcell.plugin.BotInteraction`. Each supplies a compiled
+        kernel adding the generalized forces (N, N, N cm) on two bots from their poses (cm,
+        cm, rad), and the distance between their centres (cm) beyond which it adds nothing.
+        A run chooses them by name (``interactions`` in ``[bots]``, ``--bot-interactions``;
+        default ``bot_repulsion``).
 
     Called once when the registry is built.
     """

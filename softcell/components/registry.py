@@ -55,6 +55,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.integrators.rodas4",
     "softcell.builtins.threshold",
     "softcell.builtins.repulsion",
+    "softcell.builtins.bot_repulsion",
 )
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
@@ -352,10 +353,16 @@ class Registry:
 def chosen(cls: type[Component], components: Mapping[str, Any]) -> bool:
     """Whether ``components`` (names by kind, ``energy_terms`` a list) names ``cls``; the
     pair terms are ``pair_terms``, or those of the ``assembly`` settings a file stores."""
-    lists = {"energy_term": "energy_terms", "pair_term": "pair_terms"}
+    lists = {
+        "energy_term": "energy_terms",
+        "pair_term": "pair_terms",
+        "bot_interaction": "bot_interactions",
+    }
     names = components.get(lists.get(cls.kind, cls.kind))
     if names is None and cls.kind == "pair_term":
         names = (components.get("assembly") or {}).get("pair_terms")
+    if names is None and cls.kind == "bot_interaction":
+        names = (components.get("bots") or {}).get("interactions")
     return cls.name in names if isinstance(names, list | tuple) else cls.name == names
 
 
@@ -391,6 +398,7 @@ def check_point(params: Any, registry: Registry, components: Mapping[str, Any]) 
     names += [("energy_term", n) for n in components.get("energy_terms", [])]
     names += [(k, components[k]) for k in ("driving_protocol", "friction_law") if k in components]
     names += [("pair_term", n) for n in components.get("pair_terms", [])]
+    names += [("bot_interaction", n) for n in components.get("bot_interactions", [])]
     for kind, name in names:
         registry.get(kind, name).check(params)
 

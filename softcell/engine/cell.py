@@ -115,6 +115,7 @@ def run_realization(
     checkpoint_every: float = CHECKPOINT_EVERY,
     progress: Callable[[float], None] | None = None,
     stop: Callable[[], bool] | None = None,
+    start: tuple[dict[str, np.ndarray], Schedule | list[Schedule]] | None = None,
 ) -> Record:
     """Integrate one realization over the sampling grid of ``model.params``: the membrane at
     :func:`~softcell.engine.state.sample_times`, the cell's centre and the bot's pose
@@ -129,6 +130,11 @@ def run_realization(
         Called with the simulated seconds advanced since its last call.
     stop : callable, optional
         Asked between chunks of samples; True stops the run as Ctrl-C does.
+    start : (state, schedules), optional
+        The stepper's starting state and the bots' schedules, for several bots in one ring
+        (:mod:`softcell.engine.bots`): the pose record then has 3 columns per bot and the
+        phase record one per bot. None: one bot, started by
+        :func:`~softcell.engine.state.initial_state` from ``rng``.
 
     Raises
     ------
@@ -137,14 +143,17 @@ def run_realization(
         last finished chunk; its message says where the run stopped.
     """
     times, membrane, fine = sampling_plan(model.params)
-    modes, pose, schedule = initial_state(model, rng)
-    state = stepper.start(modes, pose, schedule)
+    if start is None:
+        modes, pose, schedule = initial_state(model, rng)
+        state = stepper.start(modes, pose, schedule)
+    else:
+        state, schedule = start
     grid = SampleGrid(
         times,
         membrane,
         fine,
-        np.empty((membrane.size, modes.size), dtype=np.complex128),
-        np.empty((times.size, 3)),
+        np.empty((membrane.size, state["modes"].size), dtype=np.complex128),
+        np.empty((times.size, state["pose"].size)),
         np.empty(times.size, dtype=np.complex128),
     )
     first, state = _restored(checkpoint, grid, state)
@@ -187,16 +196,25 @@ def run_realization(
         membrane_times,
         grid.modes,
         grid.pose[membrane],
-        phase_at(schedule, membrane_times, starts),
+        _phases(schedule, membrane_times, starts),
         state,
         fine_times=fine_times_,
         fine_center=grid.center[fine],
         fine_pose=grid.pose[fine],
-        fine_phase=phase_at(schedule, fine_times_, starts),
+        fine_phase=_phases(schedule, fine_times_, starts),
         event_times=None
         if starts is None
         else state["event_times"][: int(state["event_count"][0])].copy(),
     )
+
+
+def _phases(
+    schedule: Schedule | list[Schedule], times: np.ndarray, starts: np.ndarray | None
+) -> np.ndarray:
+    """The phase codes at ``times``: int8[T] for one bot, int8[T, K] for several."""
+    if isinstance(schedule, list):
+        return np.stack([phase_at(s, times) for s in schedule], axis=-1)
+    return phase_at(schedule, times, starts)
 
 
 def _restored(
@@ -231,12 +249,13 @@ def _sample_checked(
     except SimulationError as exc:
         modes, pose, t = stepper.current(state)  # a failed step may run ahead of the samples
         n = grid.membrane_before(filled)
-        why = diagnose(
+        first_bot = schedule[0] if isinstance(schedule, list) else schedule
+        why = diagnose(  # of the first bot, with several
             model,
             np.append(grid.times[grid.membrane[:n]], t),
             np.vstack([grid.modes[:n], modes[None]]),
-            np.vstack([grid.pose[grid.membrane[:n]], pose[None]]),
-            schedule,
+            np.vstack([grid.pose[grid.membrane[:n]], pose[None]])[:, :3],
+            first_bot,
         )
         raise SimulationError(f"{exc}; {why}") from None
 

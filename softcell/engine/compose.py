@@ -191,3 +191,18 @@ def compose_pair_laws(terms) -> Callable[..., None]:
     source = _PREAMBLE + "\n".join(lines) + "\n"
     names = _names([t.law_kernel() for t in terms]) or "no pair terms"
     return compiled_function("pair-laws", source, "pair_law", bindings, names)
+
+
+def compose_interactions(interactions) -> Callable[..., None]:
+    """The bot interactions' kernels summed: ``interact(pose_a, pose_b, context,
+    coefficients, out)`` adds every interaction's generalized forces on bots a and b (N, N,
+    N cm) into ``out[0:6]``; ``coefficients`` is the tuple of their arrays."""
+    bindings = {f"i{n}": c.pair_kernel() for n, c in enumerate(interactions)}
+    lines = ["@njit(**JIT_FLAGS)\ndef interact(pose_a, pose_b, context, coefficients, out):"]
+    lines += [
+        f"    i{n}(pose_a, pose_b, context, coefficients[{n}], out)"
+        for n in range(len(interactions))
+    ] or ["    pass"]
+    source = _PREAMBLE + "\n".join(lines) + "\n"
+    names = _names(list(bindings.values())) or "no bot interactions"
+    return compiled_function("bot-interactions", source, "interact", bindings, names)

@@ -33,6 +33,7 @@ def build_model(
     *,
     registry: Registry,
     pair_terms: Sequence[str] = (),
+    bot_interactions: Sequence[str] = (),
 ) -> Model:
     """Instantiate the named components for ``params`` and compile their composition.
 
@@ -54,6 +55,8 @@ def build_model(
         plugins).
     pair_terms : sequence of str
         Names of registered pair terms, for an assembly of cells (none for one cell).
+    bot_interactions : sequence of str
+        Names of registered bot interactions, for several bots in one ring (none for one).
 
     Returns
     -------
@@ -72,7 +75,8 @@ def build_model(
     drive = registry.get("driving_protocol", protocol)(params)
     friction: FrictionLaw = registry.get("friction_law", friction_law)(params)
     pairs = [registry.get("pair_term", n)(params) for n in pair_terms]
-    everything = (*terms, drive, friction, *pairs)
+    interactions = [registry.get("bot_interaction", n)(params) for n in bot_interactions]
+    everything = (*terms, drive, friction, *pairs, *interactions)
     origins = {f"{c.kind} {c.name}": registry.origin(c.kind, c.name) for c in everything}
     for component in everything:
         check_kernels(component, origins[f"{component.kind} {component.name}"])
@@ -112,6 +116,7 @@ def build_model(
         origins=origins,
         pair_terms=pairs,
         event=drive.event_kernel(),
+        bot_interactions=interactions,
     )
     probe_components(model)  # a kernel writing NaN is named here, before anything steps
     return model

@@ -37,3 +37,8 @@ def no_bot_hessians(pose, context, coefficients, steps, pose_tmp, plus, minus, h
 def no_event(phase, datum, sense, coefficients):
     """Stands for a protocol's event kernel (it has none): never ends a phase."""
     return -1.0
+
+
+@njit(**JIT)
+def no_interaction(pose_a, pose_b, context, coefficients, out):
+    """Stands for the bots' interactions (there are none): adds nothing to ``out``."""

@@ -31,6 +31,7 @@ from softcell.engine.interrupt import deferred
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.io.files import gsd_attributes as gsd_attributes  # read here, kept with the files
+from softcell.schema import refuse_several_bots
 
 #: The GSD particle types, in order of their type ids.
 TYPES = ("membrane", "bot")
@@ -86,6 +87,7 @@ def _check_simulation(ds: xr.Dataset) -> None:
             f"export takes a simulation file (softcell simulate); this one is a softcell "
             f"{origin or 'unknown'} file"
         )
+    refuse_several_bots(ds, "export")
     extra = [d for d in ds.dims if d not in ("realization", "time", "cell", "node", "fine_time")]
     if extra:
         raise SoftcellError(

@@ -69,7 +69,7 @@ DEFAULT_COMPONENTS: dict[str, Any] = {
     "stopgo_detector": "threshold",
 }
 RUN_KEYS: dict[str, type] = {"seed": int, "realizations": int}
-SECTIONS = ("parameters", "components", "run", "analysis", "obstacles", "assembly")
+SECTIONS = ("parameters", "components", "run", "analysis", "obstacles", "assembly", "bots")
 
 
 @dataclass(frozen=True)
@@ -95,6 +95,10 @@ class RunConfig:
         Many cells (the ``[assembly]`` table: ``cells``, ``box`` in cm, ``boundary``,
         ``placement``, ``gap`` in cm; see :class:`~softcell.model.assembly.Assembly`); empty
         for one cell.
+    bots : dict
+        Several bots in one ring (the ``[bots]`` table: ``count``, ``placement``, ``gap`` in
+        cm, ``interactions``; see :class:`~softcell.model.bots.Bots`); empty, or a count of
+        1, for one bot.
     """
 
     parameters: dict[str, Any] = field(default_factory=dict)
@@ -102,6 +106,7 @@ class RunConfig:
     run: dict[str, Any] = field(default_factory=dict)
     analysis: dict[str, Any] = field(default_factory=dict)
     assembly: dict[str, Any] = field(default_factory=dict)
+    bots: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # A kind not named takes its default: RunConfig(components={"integrator": "x"}).
@@ -113,6 +118,7 @@ class RunConfig:
         components: Mapping[str, Any] = (),
         run: Mapping[str, Any] = (),
         assembly: Mapping[str, Any] = (),
+        bots: Mapping[str, Any] = (),
     ) -> RunConfig:
         """A copy with some entries replaced (command-line flags over a file).
 
@@ -126,6 +132,8 @@ class RunConfig:
             Run settings.
         assembly : mapping
             Settings of an assembly of cells (``cells``, ``box``, ...).
+        bots : mapping
+            Settings of several bots in one ring (``count``, ``placement``, ...).
         """
         return dataclasses.replace(
             self,
@@ -133,6 +141,7 @@ class RunConfig:
             components={**self.components, **dict(components)},
             run={**self.run, **dict(run)},
             assembly={**self.assembly, **dict(assembly)},
+            bots={**self.bots, **dict(bots)},
         )
 
     def check_components(self, registry: Lookup) -> None:
@@ -200,6 +209,7 @@ def config_from_mapping(data: dict[str, Any], source: object = "configuration") 
             run=run,
             analysis=dict(data.get("analysis", {})),
             assembly=dict(data.get("assembly", {})),
+            bots=dict(data.get("bots", {})),
         )
     )
 
@@ -243,6 +253,17 @@ def assembly_of(config: RunConfig):
     from softcell.model.assembly import Assembly
 
     return Assembly.from_mapping(dict(config.assembly)) if config.assembly else None
+
+
+def bots_of(config: RunConfig):
+    """The :class:`~softcell.model.bots.Bots` ``config`` asks for, None for one bot (no
+    ``[bots]`` settings, or a count of 1: the single-bot run, to the bit)."""
+    from softcell.model.bots import Bots
+
+    if not config.bots:
+        return None
+    bots = Bots.from_mapping(dict(config.bots))
+    return bots if bots.count > 1 else None
 
 
 def with_assembly_terms(config: RunConfig) -> RunConfig:

@@ -25,7 +25,7 @@ from softcell.components.registry import (
     default_registry,
 )
 from softcell.errors import ConfigError, SoftcellError
-from softcell.model.configuration import RunConfig, assembly_of, with_assembly_terms
+from softcell.model.configuration import RunConfig, assembly_of, bots_of, with_assembly_terms
 from softcell.model.limits import (
     check_realizations,
     check_run,
@@ -86,12 +86,19 @@ def plan(
         components["pair_terms"] = list(assembly.pair_terms)
         for name in assembly.pair_terms:
             registry.get("pair_term", name)
+    several = bots_of(config)
+    if several is not None:
+        components["bot_interactions"] = list(several.interactions)
+        for name in several.interactions:
+            registry.get("bot_interaction", name)
     check_in_use(config.parameters, registry, components)
     # Only the parameters of the components in use: installing a plugin changes no request.
     points = expand_sweep(config.parameters, list(registry.parameter_specs(components).values()))
     for _, params in points:
         check_run(params)
         check_point(params, registry, components)
+    if several is not None:
+        _check_bots(several, assembly, components, points, realizations, seed, membrane, registry)
     if assembly is not None:
         _check_assembly(assembly, config, points, realizations, seed, membrane, registry)
     else:
@@ -104,7 +111,8 @@ def plan(
         )
     )
     settings = assembly.as_dict() if assembly is not None else None
-    stored = stored_components(dict(config.components), membrane, registry, settings)
+    bots = several.as_dict() if several is not None else None
+    stored = stored_components(dict(config.components), membrane, registry, settings, bots)
     code = component_code(stored, registry)
     return [
         Task(
@@ -119,10 +127,55 @@ def plan(
             swept=swept,
             assembly=settings,
             code=code,
+            bots=bots,
         )
         for p, (_, params) in enumerate(points)
         for r in range(realizations)
     ]
+
+
+def _check_bots(bots, assembly, components, points, realizations, seed, membrane, registry):
+    """Refuse several bots in one ring that cannot run, in one line, before anything is
+    computed: with an assembly or a free bot, an integrator that does not step them, a
+    nonlinear friction law, a protocol with state events, or bots that do not fit."""
+    import numpy as np
+
+    from softcell.engine.bots import bot_rngs, placement_rng
+    from softcell.engine.state import equilibrium_radius
+    from softcell.model.bots import place_bots
+
+    if assembly is not None:
+        raise SoftcellError(
+            "several bots per cell in an assembly of cells are not built yet: drop --bots or "
+            "[assembly]"
+        )
+    if not membrane:
+        raise SoftcellError("several bots need a ring: drop --free-bot or --bots")
+    integrator = components["integrator"]
+    if not getattr(registry.get("integrator", integrator), "steps_bots", False):
+        raise SoftcellError(
+            f"integrator {integrator!r} does not step several bots in one ring: use rodas4"
+        )
+    law = registry.get("friction_law", components.get("friction_law", "viscous"))
+    if not law.linear:
+        raise SoftcellError(
+            f"friction law {law.name!r} is not linear: several bots in one ring need the "
+            "viscous law (the parts' membrane velocities are summed)"
+        )
+    protocol = registry.get("driving_protocol", components["driving_protocol"])
+    for p, (_, params) in enumerate(points):
+        drive = protocol(params)
+        if drive.event_kernel() is not None:
+            raise SoftcellError(
+                f"driving protocol {protocol.name!r} ends phases on state events, which the "
+                "loop of several bots does not locate yet: choose another protocol"
+            )
+        a, b = float(params.bot_semi_major), float(params.bot_semi_minor)
+        radius = equilibrium_radius(params)
+        for r in range(realizations if bots.placement == "random" else 1):
+            rngs = bot_rngs(seed, p, r, bots.count)
+            headings = np.array([drive.initial_heading(g) for g in rngs])
+            place_bots(bots, radius, a, b, headings, placement_rng(seed, p, r))
 
 
 def _check_assembly(assembly, config, points, realizations, seed, membrane, registry) -> None:

@@ -72,6 +72,8 @@ class Task:
         another request.
     assembly : dict, optional
         Many cells (:meth:`softcell.model.assembly.Assembly.as_dict`); None for one cell.
+    bots : dict, optional
+        Several bots in one ring (:meth:`softcell.model.bots.Bots.as_dict`); None for one.
     """
 
     point: int
@@ -85,6 +87,7 @@ class Task:
     swept: tuple[str, ...] = field(default=("radius",))
     assembly: dict[str, Any] | None = None
     code: dict[str, str] = field(default_factory=dict)
+    bots: dict[str, Any] | None = None
 
     @property
     def name(self) -> str:
@@ -129,12 +132,16 @@ def stored_components(
     membrane: bool,
     registry: Registry,
     assembly: dict[str, Any] | None = None,
+    bots: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The component names as a file stores them (see :attr:`Task.stored_components`), with
-    an assembly's settings under ``assembly`` (none for one cell)."""
+    an assembly's settings under ``assembly`` (none for one cell) and those of several bots
+    under ``bots`` (none for one bot)."""
     stored = {**components, "membrane": membrane}
     if assembly is not None:
         stored["assembly"] = dict(assembly)
+    if bots is not None:
+        stored["bots"] = dict(bots)
     if not membrane:
         names: Iterable[str] = components.get("energy_terms", [])
         stored["energy_terms"] = [n for n in names if registry.get("energy_term", n).has_bot_energy]
@@ -264,7 +271,7 @@ _BUILT: dict[str, tuple[Model, Stepper]] = {}
 
 def _model_and_stepper(task: Task, registry: Registry) -> tuple[Model, Stepper]:
     """The task's compiled model and stepper, built once per process and request."""
-    key = json.dumps([task.params.given, task.components, task.membrane], sort_keys=True)
+    key = json.dumps([task.params.given, task.components, task.membrane, task.bots], sort_keys=True)
     if key not in _BUILT:
         model = build_model(
             task.params,
@@ -274,9 +281,14 @@ def _model_and_stepper(task: Task, registry: Registry) -> tuple[Model, Stepper]:
             friction_law=task.components.get("friction_law", "viscous"),
             registry=registry,
             pair_terms=task.components.get("pair_terms", ()),
+            bot_interactions=task.components.get("bot_interactions", ()),
         )
         integrator = build_integrator(task.components["integrator"], task.params, registry)
-        _BUILT[key] = (model, integrator.build(model))
+        if task.bots is not None:
+            stepper = integrator.build_bots(model, task.bots["count"])
+        else:
+            stepper = integrator.build(model)
+        _BUILT[key] = (model, stepper)
     return _BUILT[key]
 
 
@@ -312,6 +324,8 @@ def run_task(
     model, stepper = _model_and_stepper(task, registry)
     if task.assembly is not None:
         return _run_assembly(task, model, stepper, progress, checkpoint_every, stoppable)
+    if task.bots is not None:
+        return _run_bots(task, model, stepper, progress, checkpoint_every, stoppable)
     return _run_and_write(
         task,
         stoppable,
@@ -404,4 +418,42 @@ def _run_assembly(
             stop=stop,
         ),
         lambda record, stored: crowd_dataset(record, model, assembly, centres, **stored),
+    )
+
+
+def _run_bots(
+    task: Task,
+    model: Model,
+    stepper: Stepper,
+    progress: Callable[[float], None] | None,
+    checkpoint_every: float,
+    stoppable: bool,
+) -> str | None:
+    """Run one realization of several bots in one ring and write its file, checkpointing as
+    a single bot's realization does."""
+    from softcell.engine.bots import bot_rngs, bots_dataset, placement_rng, start_bots
+    from softcell.model.bots import Bots
+
+    bots = Bots.from_mapping(task.bots)
+    modes, poses, schedules = start_bots(
+        model,
+        bots,
+        bot_rngs(task.seed, task.point, task.realization, bots.count),
+        placement_rng(task.seed, task.point, task.realization),
+    )
+    return _run_and_write(
+        task,
+        stoppable,
+        lambda checkpoint, stop: run_realization(
+            model,
+            stepper,
+            None,
+            label=task.name,
+            checkpoint=checkpoint,
+            checkpoint_every=checkpoint_every,
+            progress=progress,
+            stop=stop,
+            start=(stepper.start(modes, poses, schedules), schedules),
+        ),
+        lambda record, stored: bots_dataset(record, model, bots, poses, **stored),
     )

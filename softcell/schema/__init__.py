@@ -13,6 +13,8 @@ from softcell.schema.analysis import (
     SWEEP,
 )
 from softcell.schema.simulation import (
+    BOT_COORDINATE,
+    BOT_START_VARIABLES,
     CELL_COORDINATE,
     CONVENTIONS,
     COORDINATES,
@@ -41,14 +43,18 @@ from softcell.schema.simulation import (
     VariableSpec,
     global_attrs,
     problems,
+    refuse_several_bots,
     simulation_dataset,
     validate,
+    with_bot,
     with_cell,
 )
 
 __all__ = [
     "ANALYSIS_VARIABLES",
     "BODY_QUANTITIES",
+    "BOT_COORDINATE",
+    "BOT_START_VARIABLES",
     "CELL_COORDINATE",
     "CONVENTIONS",
     "COORDINATES",
@@ -84,5 +90,7 @@ __all__ = [
     "problems",
     "simulation_dataset",
     "validate",
+    "refuse_several_bots",
+    "with_bot",
     "with_cell",
 ]

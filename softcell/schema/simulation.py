@@ -90,6 +90,44 @@ DOMAIN_VARIABLES: dict[str, VariableSpec] = {
 }
 
 
+#: The coordinate of several bots in one ring: a file of K > 1 bots has the bot's variables
+#: (``bot_*`` and ``bot_*_fine``) with ``bot`` after their time dim.
+BOT_COORDINATE = VariableSpec("bot", ("bot",), "i", "1", "bot index in the ring")
+
+#: Where each bot started (per realization, so that the files of a sweep concatenate).
+BOT_START_VARIABLES: dict[str, VariableSpec] = {
+    v.name: v
+    for v in (
+        VariableSpec("bot_start_x", ("realization", "bot"), "f", "cm", "bot starting x"),
+        VariableSpec("bot_start_y", ("realization", "bot"), "f", "cm", "bot starting y"),
+        VariableSpec("bot_start_angle", ("realization", "bot"), "f", "rad", "bot starting heading"),
+    )
+}
+
+
+def with_bot(dims: tuple[str, ...]) -> tuple[str, ...]:
+    """``dims`` of a bot's variable as a file of several bots stores it: ``bot`` after the
+    time dim (after ``cell`` in an assembly)."""
+    for i, d in enumerate(dims):
+        if d in ("time", "fine_time"):
+            j = i + 2 if i + 1 < len(dims) and dims[i + 1] == "cell" else i + 1
+            return (*dims[:j], "bot", *dims[j:])
+    return dims
+
+
+def refuse_several_bots(ds: xr.Dataset, what: str) -> None:
+    """Raise :class:`~softcell.errors.SoftcellError` in one line when ``ds`` holds several
+    bots in one ring, which ``what`` (a command) does not handle yet."""
+    if "bot" in ds.dims:
+        from softcell.errors import SoftcellError
+
+        raise SoftcellError(
+            f"{what} does not handle files of several bots in one ring yet (this one has "
+            f"{ds.sizes['bot']} bots); open it with softcell.open_dataset and select one, "
+            "ds.isel(bot=0), for a first look"
+        )
+
+
 def with_cell(dims: tuple[str, ...]) -> tuple[str, ...]:
     """``dims`` of a one-cell variable as an assembly stores it: ``cell`` after the time
     dim (``time`` or ``fine_time``); dims without a time dim are unchanged."""
@@ -183,6 +221,9 @@ def problems(ds: xr.Dataset) -> list[str]:
     if "cell" in ds.dims:
         for spec in (CELL_COORDINATE, *DOMAIN_VARIABLES.values()):
             found.extend(_variable_problems(ds, spec))
+    if "bot" in ds.dims:
+        for spec in (BOT_COORDINATE, *BOT_START_VARIABLES.values()):
+            found.extend(_variable_problems(ds, spec))
     if "time" in ds.coords and ds.sizes.get("time", 0) > 1:
         if not bool(np.all(np.diff(ds["time"].values) > 0)):
             found.append("time: values must increase strictly")
@@ -231,6 +272,8 @@ def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
     # (with ``cell`` after the time dim in an assembly's file).
     per_cell = spec.name in VARIABLES or spec.name in FINE_VARIABLES
     expected = with_cell(spec.dims) if per_cell and "cell" in ds.dims else spec.dims
+    if per_cell and "bot" in ds.dims and spec.name.startswith("bot_"):
+        expected = with_bot(expected)
     if var.dims[len(var.dims) - len(expected) :] != expected:
         found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(expected)})")
     if var.dtype.kind not in (spec.kind, "u" if spec.kind == "i" else spec.kind):
@@ -302,6 +345,7 @@ def simulation_dataset(
     fine: Mapping[str, np.ndarray] | None = None,
     domain: Mapping[str, Any] | None = None,
     events: np.ndarray | None = None,
+    bots: Mapping[str, Any] | None = None,
 ) -> xr.Dataset:
     """Build a simulation Dataset that follows the schema.
 
@@ -339,6 +383,10 @@ def simulation_dataset(
     events : float64[R, E], optional
         The times (s) at which the protocol's state events ended phases, NaN-padded
         (``event_time``; only for a protocol with events).
+    bots : mapping, optional
+        For several bots in one ring: ``start`` (float64[K, 3]: the starting poses, cm, cm,
+        rad) and ``settings`` (stored as the attribute ``bots`` of ``bot_start_x``); the
+        bot's variables then have a ``bot`` dim after their time dim ([R, T, K]).
     """
     if cell_x is None:
         cell_x = membrane_x.mean(axis=-1)
@@ -354,9 +402,13 @@ def simulation_dataset(
         "bot_angle": bot_angle,
         "bot_phase": np.asarray(bot_phase, dtype=np.int8),
     }
-    dims = with_cell if domain is not None else (lambda d: d)
+
+    def dims(d: tuple[str, ...], name: str = "") -> tuple[str, ...]:
+        d = with_cell(d) if domain is not None else d
+        return with_bot(d) if bots is not None and name.startswith("bot_") else d
+
     data_vars = {
-        name: (dims(VARIABLES[name].dims), np.asarray(arr), VARIABLES[name].cf_attrs())
+        name: (dims(VARIABLES[name].dims, name), np.asarray(arr), VARIABLES[name].cf_attrs())
         for name, arr in arrays.items()
     }
     n_nodes = np.shape(membrane_x)[-1]
@@ -379,7 +431,7 @@ def simulation_dataset(
             values = np.asarray(fine[name])
             if spec.name == "bot_phase_fine":
                 values = values.astype(np.int8)
-            data_vars[name] = (dims(spec.dims), values, spec.cf_attrs())
+            data_vars[name] = (dims(spec.dims, name), values, spec.cf_attrs())
     if events is not None:
         events = np.asarray(events, dtype=np.float64)
         coords["event"] = (
@@ -402,6 +454,13 @@ def simulation_dataset(
                 np.asarray(value, np.float64),
                 {**spec.cf_attrs(), **extra},
             )
+    if bots is not None:
+        start = np.asarray(bots["start"], dtype=np.float64)
+        coords["bot"] = ("bot", np.arange(len(start), dtype=np.int64), BOT_COORDINATE.cf_attrs())
+        for column, name in enumerate(BOT_START_VARIABLES):
+            spec = BOT_START_VARIABLES[name]
+            extra = {"bots": json.dumps(bots["settings"], sort_keys=True)} if column == 0 else {}
+            data_vars[name] = (spec.dims, start[None, :, column], {**spec.cf_attrs(), **extra})
     for name in dict.fromkeys(scalar_coords):
         spec = parameters.specs[name]
         coords[name] = ((), parameters[name], {"units": spec.unit, "long_name": spec.long_name})

@@ -23,7 +23,7 @@ from softcell._version import __version__
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.model.obstacle_layout import Post, parse_obstacles
-from softcell.schema import validate
+from softcell.schema import refuse_several_bots, validate
 
 #: What each suffix is written as: (codec, pixel format).
 FORMATS = {".mp4": ("libx264", "yuv420p"), ".gif": ("gif", "rgb8")}
@@ -166,6 +166,7 @@ def animate(
     path = Path(out)
     _check_request(path, fps=fps, speed=speed, trail=trail, height=height, crf=crf)
     validate(ds)
+    refuse_several_bots(ds, "animate")
     swept = [d for d in ds["bot_x"].dims if d not in ("realization", "time", "cell")]
     if swept:
         raise SoftcellError(

@@ -193,3 +193,78 @@ def signed_distance(x, y, cx, cy, theta, a, b):
     py = -s * dx + c * dy
     rho, nx, ny = signed_distance_local(px, py, a, b)
     return rho, c * nx - s * ny, s * nx + c * ny
+
+
+#: Points of the coarse search of :func:`deepest_point` along an ellipse's boundary.
+GAP_SAMPLES = 32
+
+
+@njit(**LEAN_JIT)
+def _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b):
+    """The signed distance (cm) from the point of ellipse A (pose ``pa``, cos and sin of its
+    heading ``ca``, ``sa``) at parameter ``phi`` to ellipse B, with B's outward normal there
+    in the world frame, the point's offset e from A's centre and B's curvature term kk:
+    ``(rho, gx, gy, ex, ey, kk)``."""
+    lx, ly = a * math.cos(phi), b * math.sin(phi)
+    ex, ey = ca * lx - sa * ly, sa * lx + ca * ly
+    dx, dy = pa[0] + ex - pb[0], pa[1] + ey - pb[1]
+    px, py = cb * dx + sb * dy, -sb * dx + cb * dy
+    rho, nx, ny = signed_distance_local(px, py, a, b)
+    qx, qy = px - rho * nx, py - rho * ny
+    kappa = 1.0 / (a * a * b * b * ((qx / (a * a)) ** 2 + (qy / (b * b)) ** 2) ** 1.5)
+    kk = kappa / (1.0 + kappa * rho) if 1.0 + kappa * rho > 0.0 else 0.0
+    return rho, cb * nx - sb * ny, sb * nx + cb * ny, ex, ey, kk
+
+
+@njit(**LEAN_JIT)
+def deepest_point(pa, pb, a, b):
+    """The point of ellipse A's boundary (pose ``pa``: x, y in cm, heading in rad) nearest
+    to, or deepest inside, ellipse B (pose ``pb``; both of semi-axes a, b in cm): the minimum
+    over phi of the signed distance rho_B(p_A(phi)), by a search over GAP_SAMPLES points and
+    Newton's method on d rho / d phi = 0 (its second derivative is exact: the distance's
+    Hessian is kk t t^T, t the tangent at the closest point).
+
+    Returns ``(rho, gx, gy, ex, ey)``: the distance (cm, negative inside B), B's outward
+    normal at the closest point (world frame) and the point's offset from A's centre (cm).
+    At the minimum d rho / d phi = 0, so rho's derivatives with respect to the poses are
+    those at fixed phi (the envelope theorem): g for A's centre, -g for B's.
+    """
+    ca, sa = math.cos(pa[2]), math.sin(pa[2])
+    cb, sb = math.cos(pb[2]), math.sin(pb[2])
+    spacing = 2.0 * math.pi / GAP_SAMPLES
+    best, phi = math.inf, 0.0
+    for i in range(GAP_SAMPLES):
+        rho = _boundary_rho(i * spacing, pa, ca, sa, pb, cb, sb, a, b)[0]
+        if rho < best:
+            best, phi = rho, i * spacing
+    lo, hi = phi - spacing, phi + spacing
+    for _ in range(ELLIPSE_ITERATIONS):
+        rho, gx, gy, ex, ey, kk = _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b)
+        tx, ty = -a * math.sin(phi), b * math.cos(phi)  # d p / d phi, A's frame
+        wx, wy = ca * tx - sa * ty, sa * tx + ca * ty
+        first = gx * wx + gy * wy
+        # d2 rho / d phi2 = kk (t . p')^2 + g . p'' with p'' = -e
+        second = kk * (gx * wy - gy * wx) ** 2 - (gx * ex + gy * ey)
+        if first > 0.0:
+            hi = phi
+        else:
+            lo = phi
+        step = -first / second if second > 0.0 else -0.5 * spacing * math.copysign(1.0, first)
+        new = phi + step
+        if not lo < new < hi:
+            new = 0.5 * (lo + hi)
+        if abs(new - phi) <= 1e-14 * (1.0 + abs(phi)):
+            phi = new
+            break
+        phi = new
+    rho, gx, gy, ex, ey, kk = _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b)
+    return rho, gx, gy, ex, ey
+
+
+@njit(**LEAN_JIT)
+def ellipse_gap(pa, pb, a, b):
+    """The gap (cm) between two ellipses of semi-axes a, b at poses ``pa``, ``pb``: the mean
+    of :func:`deepest_point` both ways, negative when they overlap (each way is the deepest
+    penetration of one boundary into the other). It depends on the relative placement only,
+    so forces derived from it are equal and opposite and conserve angular momentum."""
+    return 0.5 * (deepest_point(pa, pb, a, b)[0] + deepest_point(pb, pa, a, b)[0])

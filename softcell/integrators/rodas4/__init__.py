@@ -620,6 +620,8 @@ class Rodas4(Integrator):
     name = "rodas4"
     #: Steps groups of cells in contact together (:meth:`Rodas4Stepper.advance_cells`).
     steps_groups = True
+    #: Steps several bots in one ring (:meth:`build_bots`).
+    steps_bots = True
     description = (
         "adaptive Rosenbrock RODAS4, order 4(3), full Jacobian, steps on the "
         "protocol's switches, dense output"
@@ -671,6 +673,22 @@ class Rodas4(Integrator):
             float(p.max_step),
             float(p.first_step),
             int(p.smooth_nodes),
+        )
+
+    def build_bots(self, model: Model, bots: int):
+        """The stepper of ``bots`` (> 1) bots in one ring
+        (:class:`~softcell.integrators.rodas4.several.BotsStepper`)."""
+        from softcell.integrators.rodas4.several import BotsStepper
+
+        p = self.params
+        return BotsStepper(
+            model,
+            bots,
+            float(p.atol),
+            float(p.rtol),
+            float(p.max_step),
+            float(p.first_step),
+            min(int(p.smooth_nodes), model.nodes),
         )
 
 

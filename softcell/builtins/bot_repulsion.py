@@ -1,0 +1,98 @@
+"""The built-in bot interaction ``bot_repulsion``: two bots in one ring repel each other with a
+soft law of their gap, e = F_c lambda_b exp(-gap / lambda_b), nothing beyond
+CONTACT_CUTOFF_LENGTHS lambda_b (docs/model.md, "Several bots in one ring").
+
+The gap is that of :func:`softcell.engine.kernels.ellipse.ellipse_gap`: the mean, both
+ways, of the signed distance from the point of one ellipse's boundary deepest into (or
+nearest to) the other. Each way's derivatives with respect to the two poses are those at the
+fixed boundary point (the envelope theorem): along B's outward normal g at the closest point,
+d rho / d r_A = g, d rho / d theta_A = e x g (e the point's offset from A's centre),
+d rho / d r_B = -g and d rho / d theta_B = -(d x g) (d its offset from B's centre). The gap
+depends on the bots' relative placement only, so the forces are equal and opposite and the
+torques balance about any point.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from softcell.components.contracts import BotInteraction
+from softcell.components.hookspecs import hookimpl
+from softcell.engine.kernels.ellipse import deepest_point
+from softcell.model.parameters import ParameterSpec
+from softcell.settings import CONTACT_CUTOFF_LENGTHS, LEAN_JIT
+
+
+@njit(**LEAN_JIT)
+def bot_repulsion_kernel(pose_a, pose_b, context, coefficients, out):
+    """coefficients = [F_c (N), lambda_b (cm), cut-off (cm), reach (cm)]; context[1:3] = a, b."""
+    force, length = coefficients[0], coefficients[1]
+    cutoff, reach = coefficients[2], coefficients[3]
+    a, b = context[1], context[2]
+    dx, dy = pose_b[0] - pose_a[0], pose_b[1] - pose_a[1]
+    if dx * dx + dy * dy > reach * reach:
+        return
+    rho_a, gax, gay, eax, eay = deepest_point(pose_a, pose_b, a, b)  # a point of A, against B
+    rho_b, gbx, gby, ebx, eby = deepest_point(pose_b, pose_a, a, b)  # a point of B, against A
+    gap = 0.5 * (rho_a + rho_b)
+    if gap > cutoff:
+        return
+    # -dE/dgap = F_c exp(-gap / lambda_b), and d gap = (d rho_a + d rho_b) / 2
+    w = 0.5 * force * math.exp(-gap / length)
+    # offsets of each point from the other bot's centre
+    dax, day = pose_a[0] + eax - pose_b[0], pose_a[1] + eay - pose_b[1]
+    dbx, dby = pose_b[0] + ebx - pose_a[0], pose_b[1] + eby - pose_a[1]
+    out[0] += w * (gax - gbx)
+    out[1] += w * (gay - gby)
+    out[2] += w * ((eax * gay - eay * gax) - (dbx * gby - dby * gbx))
+    out[3] += w * (gbx - gax)
+    out[4] += w * (gby - gay)
+    out[5] += w * ((ebx * gby - eby * gbx) - (dax * gay - day * gax))
+
+
+class BotRepulsion(BotInteraction):
+    name = "bot_repulsion"
+    description = (
+        "bot-bot repulsion F_c lambda_b exp(-gap/lambda_b) of the ellipses' gap (both ways' "
+        "deepest boundary point)"
+    )
+    parameters = (
+        ParameterSpec(
+            "bot_contact_force",
+            0.4275,
+            "N",
+            "bot-bot repulsion force F_c at zero gap (ten drive forces)",
+            minimum=0.0,
+        ),
+        ParameterSpec(
+            "bot_contact_length",
+            0.05,
+            "cm",
+            "bot-bot repulsion length lambda_b",
+            minimum=0.0,
+        ),
+    )
+
+    def coefficients(self) -> np.ndarray:
+        p = self.params
+        length = float(p.bot_contact_length)
+        return np.array(
+            [float(p.bot_contact_force), length, CONTACT_CUTOFF_LENGTHS * length, self.reach()]
+        )
+
+    def pair_kernel(self):
+        return bot_repulsion_kernel
+
+    def reach(self) -> float:
+        """Two semi-major axes and the cut-off: bots whose centres are farther apart cannot
+        be within the cut-off of each other."""
+        p = self.params
+        return 2 * float(p.bot_semi_major) + CONTACT_CUTOFF_LENGTHS * float(p.bot_contact_length)
+
+
+@hookimpl
+def softcell_bot_interactions() -> list[type[BotInteraction]]:
+    return [BotRepulsion]

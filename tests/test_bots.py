@@ -1,0 +1,365 @@
+"""Several bots in one ring: the bots' contact law, the several-bot loop against independent
+computations, and the run as a user makes it (one line for what cannot run, resumes, K = 1
+is the single-bot run)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from matplotlib.path import Path as Polygon
+
+from softcell.builtins.bot_repulsion import bot_repulsion_kernel
+from softcell.cli import main
+from softcell.components.registry import default_registry
+from softcell.engine import build_model
+from softcell.engine.bots import bot_rngs, placement_rng, start_bots
+from softcell.engine.cell import run_realization
+from softcell.engine.kernels.ellipse import ellipse_gap, signed_distance_local
+from softcell.engine.kernels.spectral import resample
+from softcell.io.netcdf import open_dataset
+from softcell.model.bots import Bots, lattice_sites, place_bots
+from softcell.model.configuration import RunConfig
+from softcell.runner.ensemble import simulate
+
+A, B = 3.0, 2.0
+CONTEXT = np.array([50.0, A, B])
+#: F_c (N), lambda_b (cm), cut-off (cm), reach (cm): the built-in's defaults
+COEFFICIENTS = np.array([0.4275, 0.05, 1.25, 2 * A + 1.25])
+
+
+def _energy(pa: np.ndarray, pb: np.ndarray) -> float:
+    force, length = COEFFICIENTS[0], COEFFICIENTS[1]
+    return force * length * math.exp(-ellipse_gap(pa, pb, A, B) / length)
+
+
+def _near_pair(heading_a: float, direction: float, heading_b: float, gap: float):
+    """Two bots whose gap is ``gap`` (cm): b slid along ``direction`` until it is."""
+    pa = np.array([0.3, -0.2, heading_a])
+    unit = np.array([math.cos(direction), math.sin(direction)])
+    lo, hi = 0.0, 4 * A
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        pb = np.array([*(pa[:2] + mid * unit), heading_b])
+        if ellipse_gap(pa, pb, A, B) < gap:
+            lo = mid
+        else:
+            hi = mid
+    return pa, np.array([*(pa[:2] + hi * unit), heading_b])
+
+
+angles = st.floats(-math.pi, math.pi)
+
+
+@settings(max_examples=60, deadline=None)
+@given(angles, angles, angles, st.floats(-0.04, 0.4))
+def test_the_bots_forces_are_equal_opposite_and_balance_torques(ha, direction, hb, gap):
+    pa, pb = _near_pair(ha, direction, hb, gap)
+    out = np.zeros(6)
+    bot_repulsion_kernel(pa, pb, CONTEXT, COEFFICIENTS, out)
+    scale = np.abs(out).max()
+    assert scale > 0
+    assert np.abs(out[:2] + out[3:5]).max() <= 1e-12 * scale
+    # angular momentum about the origin: r_a x F_a + tau_a + r_b x F_b + tau_b = 0
+    total = pa[0] * out[1] - pa[1] * out[0] + out[2] + pb[0] * out[4] - pb[1] * out[3] + out[5]
+    assert abs(total) <= 1e-11 * scale * (1 + np.abs(pb[:2]).max())
+
+
+@settings(max_examples=30, deadline=None)
+@given(angles, angles, angles, st.floats(-0.04, 0.4))
+def test_the_bots_forces_are_minus_the_gradient_of_their_energy(ha, direction, hb, gap):
+    """Central differences of F_c lambda_b exp(-gap / lambda_b), the gap from its own
+    definition (an independent computation of the derivatives the kernel takes by the
+    envelope theorem)."""
+    pa, pb = _near_pair(ha, direction, hb, gap)
+    out = np.zeros(6)
+    bot_repulsion_kernel(pa, pb, CONTEXT, COEFFICIENTS, out)
+    both = np.concatenate([pa, pb])
+    gradient = np.zeros(6)
+    h = 1e-6
+    for j in range(6):
+        plus, minus = both.copy(), both.copy()
+        plus[j] += h
+        minus[j] -= h
+        gradient[j] = (_energy(plus[:3], plus[3:]) - _energy(minus[:3], minus[3:])) / (2 * h)
+    np.testing.assert_allclose(out, -gradient, rtol=0, atol=2e-6 * np.abs(out).max())
+
+
+def test_the_gap_of_two_bots_side_by_side_is_their_distance_less_two_semi_minor_axes():
+    """Parallel bots side by side: the gap is analytic."""
+    for d in (4.5, 4.01, 3.9):
+        gap = ellipse_gap(np.array([0.0, 0.0, 0.0]), np.array([0.0, d, 0.0]), A, B)
+        assert gap == pytest.approx(d - 2 * B, abs=1e-12)
+        gap = ellipse_gap(np.array([0.0, 0.0, 0.0]), np.array([d + 2.0, 0.0, math.pi]), A, B)
+        assert gap == pytest.approx(d + 2.0 - 2 * A, abs=1e-12)
+
+
+# -- the several-bot loop ---------------------------------------------------------------------
+
+
+def _model(params: dict, interactions=("bot_repulsion",)):
+    registry = default_registry()
+    components = {
+        "energy_terms": ["bending", "tension", "contact"],
+        "driving_protocol": "run_and_tumble",
+        "integrator": "rodas4",
+        "friction_law": "viscous",
+        "bot_interactions": list(interactions),
+    }
+    p = registry.parameters(params, components)
+    model = build_model(
+        p,
+        components["energy_terms"],
+        "run_and_tumble",
+        registry=registry,
+        bot_interactions=list(interactions),
+    )
+    return model, registry.get("integrator", "rodas4")(p)
+
+
+@pytest.fixture(scope="module")
+def three_bots():
+    model, integrator = _model({"radius": 8.0, "duration": 2.0})
+    return model, integrator.build_bots(model, 3)
+
+
+def test_the_several_bot_jacobian_matches_central_differences(three_bots):
+    """The loop's Jacobian (membrane, contacts, drives, bot-bot pair) against central
+    differences of its own right-hand side, at a state where bots 0 and 1 touch each other
+    and bot 2 presses on the membrane."""
+    model, stepper = three_bots
+    m = 2 * model.cutoff + 1
+    from softcell.engine.state import circle_modes, equilibrium_radius
+
+    radius = equilibrium_radius(model.params)
+    pa, pb = _near_pair(0.4, 1.1, -0.7, 0.02)
+    poses = np.array([pa, pb, [0.0, -(radius - A - 0.02), math.pi / 2]])
+    modes = circle_modes(radius, model.cutoff)
+    modes[model.cutoff + 3] = 0.01  # not a circle
+    u = np.concatenate([modes.real, modes.imag, poses.reshape(-1)])
+    phases, data = np.array([1, 0, 1], dtype=np.int8), np.array([0.0, 1.0, 0.0])
+    jac = stepper.jacobian(u, phases, data)
+    fd = np.zeros_like(jac)
+    scale = model.params.membrane_length / (2 * math.pi)
+    for j in range(u.size):
+        h = 1e-6 * (scale if j < 2 * m or j % 3 != (2 * m + 2) % 3 else 1.0)
+        plus, minus = u.copy(), u.copy()
+        plus[j] += h
+        minus[j] -= h
+        fd[:, j] = (stepper.rhs(plus, phases, data) - stepper.rhs(minus, phases, data)) / (2 * h)
+    # the pair's and the contact's blocks are nonzero
+    assert np.abs(jac[2 * m : 2 * m + 3, 2 * m + 3 : 2 * m + 6]).max() > 0
+    assert np.abs(jac[: 2 * m, 2 * m + 6 :]).max() > 0
+    error = np.abs(jac - fd).max()
+    assert error <= 1e-4 * np.abs(fd).max(), error
+
+
+def test_the_several_bot_rhs_is_the_single_bot_rhs_for_one_bot_and_the_sum_of_contacts():
+    """K = 2 with the second bot far from everything except the membrane it does not touch:
+    the membrane's velocity and bot 0's are those of the single-bot loop at bot 0 alone (the
+    split into parts and their sum, checked against the single-bot right-hand side)."""
+    from softcell.integrators.rodas4 import compiled_loop, group_coefficients, workspace
+    from softcell.integrators.rodas4.method import Problem
+
+    model, integrator = _model({"radius": 12.0, "duration": 1.0})
+    stepper = integrator.build_bots(model, 2)
+    from softcell.engine.state import circle_modes, equilibrium_radius
+
+    radius = equilibrium_radius(model.params)
+    m = 2 * model.cutoff + 1
+    modes = circle_modes(radius, model.cutoff)
+    modes[model.cutoff - 2] = 0.01
+    bot0 = np.array([0.0, -(radius - A - 0.02), 1.5])  # pressing on the membrane
+    bot1 = np.array([0.0, 2.5, 1.0])  # alone in the middle
+    u = np.concatenate([modes.real, modes.imag, bot0, bot1])
+    phases, data = np.array([1, 1], dtype=np.int8), np.zeros(2)
+    several = stepper.rhs(u, phases, data)
+    rhs, _, _ = compiled_loop(model)
+    single = np.zeros(2 * m + 3)
+    ws = workspace(model, min(int(model.params.smooth_nodes), model.nodes))
+    problem = Problem(
+        group_coefficients(model), model.context, model.drive_coefficients,
+        model.membrane_mobility, model.bot_mobility, True,
+    )  # fmt: skip
+    rhs(np.concatenate([modes.real, modes.imag, bot0]), 1, 0.0, single, problem, ws)
+    scale = np.abs(single).max()
+    np.testing.assert_allclose(several[: 2 * m + 3], single, rtol=0, atol=1e-12 * scale)
+    # bot 1 moves by its drive alone: F0 / gamma_T along its heading
+    speed = float(model.params.drive_force) / float(model.params.bot_friction)
+    np.testing.assert_allclose(
+        several[2 * m + 3 : 2 * m + 5], speed * np.array([math.cos(1.0), math.sin(1.0)])
+    )
+
+
+def _polygon_inside(x, y, px, py):
+    return Polygon(np.column_stack([x, y])).contains_points(np.column_stack([px, py]))
+
+
+@pytest.mark.parametrize(
+    "count, placement, seed", [(2, "random", 1), (3, "ring", 2), (5, "lattice", 3)]
+)
+def test_no_bot_enters_another_and_every_bot_stays_in_its_ring(count, placement, seed):
+    """Bots in a ring of 10 cm for 3 s: the bots' gap never below -0.05 cm (the soft law
+    lets them touch; at zero gap it pushes with ten drive forces), no membrane point deeper
+    than 0.05 cm inside a bot (the contact's own softness), every bot centre inside the
+    ring."""
+    model, integrator = _model({"radius": 10.0, "duration": 3.0})
+    stepper = integrator.build_bots(model, count)
+    bots = Bots(count=count, placement=placement)
+    modes, poses, schedules = start_bots(
+        model, bots, bot_rngs(seed, 0, 0, count), placement_rng(seed, 0, 0)
+    )
+    record = run_realization(
+        model, stepper, None, start=(stepper.start(modes, poses, schedules), schedules)
+    )
+    pose = record.pose.reshape(len(record.times), count, 3)
+    gaps = [
+        ellipse_gap(pose[t, i], pose[t, j], A, B)
+        for t in range(len(record.times))
+        for i in range(count)
+        for j in range(i + 1, count)
+    ]
+    assert min(gaps) > -0.05
+    mx, my = resample(record.modes, 512)
+    deepest = np.inf
+    for t in range(0, len(record.times), 10):
+        for i in range(count):
+            x, y, heading = pose[t, i]
+            c, s = math.cos(heading), math.sin(heading)
+            px = c * (mx[t] - x) + s * (my[t] - y)
+            py = -s * (mx[t] - x) + c * (my[t] - y)
+            deepest = min(
+                deepest,
+                min(signed_distance_local(u, v, A, B)[0] for u, v in zip(px, py, strict=True)),
+            )
+        assert _polygon_inside(mx[t], my[t], pose[t, :, 0], pose[t, :, 1]).all()
+    assert deepest > -0.05
+
+
+# -- placement --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("placement", ["random", "ring", "lattice"])
+def test_placed_bots_keep_the_gap_and_lie_inside_the_ring(placement):
+    rng = np.random.default_rng(3)
+    bots = Bots(count=4, placement=placement, gap=0.5)
+    poses = place_bots(bots, 10.0, A, B, rng.uniform(-3, 3, 4), rng)
+    for i in range(4):
+        phi = np.linspace(0, 2 * np.pi, 400)
+        c, s = math.cos(poses[i, 2]), math.sin(poses[i, 2])
+        x = poses[i, 0] + c * A * np.cos(phi) - s * B * np.sin(phi)
+        y = poses[i, 1] + s * A * np.cos(phi) + c * B * np.sin(phi)
+        assert np.hypot(x, y).max() <= 10.0 - 0.5 + 1e-9
+        for j in range(i + 1, 4):
+            assert ellipse_gap(poses[i], poses[j], A, B) >= 0.5 - 1e-9
+
+
+def test_the_lattice_packs_the_sites_of_an_analytic_count():
+    """Bots of 1 x 0.5 cm in a ring of 100 cm: the sites fill the disc of radius 99.5 cm at
+    the lattice's density within its rim (one row of sites lost around it)."""
+    gap = 0.1
+    sites = lattice_sites(100.0, 1.0, 0.5, gap)
+    px = 2 + gap
+    py = np.diff(np.unique(np.round(sites[:, 1], 9)))[0]
+    area = math.pi * (99.9 - 1.0) ** 2
+    assert len(sites) == pytest.approx(area / (px * py), rel=0.03)
+
+
+# -- the run as a user makes it ---------------------------------------------------------------
+
+
+def test_one_bot_is_the_single_bot_run_to_the_bit(tmp_path):
+    base = {"radius": 5.0, "duration": 0.4}
+    plain = simulate(RunConfig(parameters=base), tmp_path / "plain", seed=3, progress=False)
+    one = simulate(
+        RunConfig(parameters=base, bots={"count": 1, "placement": "lattice"}),
+        tmp_path / "one",
+        seed=3,
+        progress=False,
+    )
+    assert one[0].read_bytes() == plain[0].read_bytes()
+
+
+def test_bot_zero_draws_the_single_bot_stream():
+    """Bot 0's heading and schedule are those of the run of one bot of the same seed."""
+    model, _ = _model({"radius": 8.0, "duration": 5.0})
+    from softcell.engine.cell import realization_rng
+    from softcell.engine.state import initial_state
+
+    _, pose, schedule = initial_state(model, realization_rng(7, 2, 1))
+    _, poses, schedules = start_bots(
+        model, Bots(count=3), bot_rngs(7, 2, 1, 3), placement_rng(7, 2, 1)
+    )
+    assert poses[0, 2] == pose[2]
+    np.testing.assert_array_equal(schedules[0].start, schedule.start)
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--bots", "30"], "parameter bots = 30 is not allowed: do not fit in a ring"),
+        (["--bots", "3", "--cells", "2"], "several bots per cell in an assembly"),
+        (["--bots", "3", "--free-bot"], "several bots need a ring"),
+        (["--bots", "3", "--integrator", "explicit_euler"], "does not step several bots"),
+        (["--bots", "3", "--friction-law", "coulomb"], "is not linear"),
+        (["--bots", "2", "--bot-placement", "ring", "--radius", "4"], "a ring of starting"),
+        (["--bots", "0"], "parameter bots = 0 is not allowed"),
+        (["--bots", "2", "--bot-interactions", "nope"], "no bot_interaction named 'nope'"),
+    ],
+)
+def test_bots_that_cannot_run_are_one_line_before_anything_runs(tmp_path, capsys, flags, message):
+    out = tmp_path / "bad"
+    argv = ["simulate", "--radius", "8", "--duration", "0.3", "--quiet", "-o", str(out)]
+    assert main([*argv, *flags]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1, err
+    assert not out.exists()
+
+
+def test_a_file_of_several_bots_follows_the_schema_and_the_commands_say_what_they_cannot(
+    tmp_path, capsys
+):
+    out = tmp_path / "k2"
+    argv = ["simulate", "--radius", "8", "--duration", "0.3", "--quiet", "-o", str(out)]
+    assert main([*argv, "--bots", "2", "--seed", "5"]) == 0
+    path = next(out.glob("*.nc"))
+    ds = open_dataset(path)
+    assert ds["bot_x"].dims == ("realization", "time", "bot")
+    assert ds["bot_phase_fine"].dims == ("realization", "fine_time", "bot")
+    assert ds.sizes["bot"] == 2
+    np.testing.assert_array_equal(ds["bot_start_x"].values[0], ds["bot_x"].values[0, 0])
+    capsys.readouterr()
+    assert main(["animate", str(path), "-o", str(tmp_path / "a.gif")]) == 2
+    assert "animate does not handle files of several bots" in capsys.readouterr().err
+
+
+def test_an_interrupted_ring_of_bots_resumes_to_the_same_bytes(tmp_path, monkeypatch):
+    import softcell.runner.tasks as tasks
+
+    config = RunConfig(parameters={"radius": 8.0, "duration": 3.0}, bots={"count": 3})
+    whole = simulate(config, tmp_path / "whole", seed=4, progress=False)[0]
+    original = tasks.run_realization
+    calls = {"n": 0}
+
+    def interrupted(*args, **kwargs):
+        def progress(dt):
+            calls["n"] += 1
+            if calls["n"] == 2:
+                raise KeyboardInterrupt  # as if killed after the second chunk
+
+        kwargs["progress"] = progress
+        kwargs["checkpoint_every"] = 0.0
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(tasks, "run_realization", interrupted)
+    out = tmp_path / "resumed"
+    with pytest.raises(KeyboardInterrupt):
+        simulate(config, out, seed=4, progress=False)
+    assert not list(out.glob("*.nc"))
+    assert list(out.glob(".*.ckpt.npz"))
+    monkeypatch.setattr(tasks, "run_realization", original)
+    resumed = simulate(config, out, seed=4, progress=False)[0]
+    assert resumed.read_bytes() == whole.read_bytes()
