@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.path import Path as Polygon
+from numba import njit as njit_kernel
 
 from softcell.builtins.bot_repulsion import bot_repulsion_kernel
 from softcell.cli import main
@@ -363,3 +364,73 @@ def test_an_interrupted_ring_of_bots_resumes_to_the_same_bytes(tmp_path, monkeyp
     monkeypatch.setattr(tasks, "run_realization", original)
     resumed = simulate(config, out, seed=4, progress=False)[0]
     assert resumed.read_bytes() == whole.read_bytes()
+
+
+def test_the_alignment_recipe_of_the_plugin_guide_aligns_the_bots(tmp_path, monkeypatch):
+    # docs/plugins.md: "Alignment of the bots' headings", run as it is written there.
+    import re
+    import sys
+    from pathlib import Path
+
+    from softcell.plugin import registered
+    from softcell.testing import check_component
+
+    text = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text(encoding="utf-8")
+    pattern = r"\*Alignment of the bots' headings\*.*?```python\n(.*?)```"
+    (block,) = re.findall(pattern, text, re.S)
+    (tmp_path / "alignment_recipe.py").write_text(block, encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = __import__("alignment_recipe")
+    assert "alignment_recipe" in sys.modules
+    check_component(module.Alignment)
+    common = ["simulate", "--radius", "10", "--duration", "30", "--quiet", "--bots", "4"]
+    common += ["--bot-placement", "ring", "--seed", "3", "--realizations", "2"]
+    with registered(module):
+        both = ["--bot-interactions", "bot_repulsion,alignment"]
+        assert main([*common, *both, "-o", str(tmp_path / "aligned")]) == 0
+    assert main([*common, "-o", str(tmp_path / "free")]) == 0
+
+    def order(folder):
+        """|<e^(i theta)>| over the bots, averaged over the last two thirds and the files."""
+        values = []
+        for path in sorted(folder.glob("*.nc")):
+            heading = open_dataset(path)["bot_angle"].values[0]
+            polar = np.abs(np.exp(1j * heading).mean(axis=-1))
+            values.append(polar[len(polar) // 3 :].mean())
+        return float(np.mean(values))
+
+    assert order(tmp_path / "aligned") > 0.7 > 0.55 > order(tmp_path / "free")
+
+
+def test_check_bot_interaction_finds_a_broken_third_law_and_a_wrong_jacobian():
+    from softcell.plugin import BotInteraction
+    from softcell.testing import check_bot_interaction
+
+    @njit_kernel
+    def push_a_only(pose_a, pose_b, context, coefficients, out):
+        dx, dy = pose_b[0] - pose_a[0], pose_b[1] - pose_a[1]
+        if dx * dx + dy * dy < 25.0:
+            out[0] -= 0.01 * dx
+
+    @njit_kernel
+    def no_jacobian(pose_a, pose_b, context, coefficients, steps, scratch, jac):
+        jac[0, 0] += 1.0
+
+    class OneSided(BotInteraction):
+        name = "one_sided"
+        description = "pushes bot a only"
+
+        def pair_kernel(self):
+            return push_a_only
+
+        def jacobian_kernel(self):
+            return no_jacobian
+
+        def reach(self):
+            return 5.0
+
+    with pytest.raises(AssertionError) as failed:
+        check_bot_interaction(OneSided)
+    message = str(failed.value)
+    assert "forces are not equal and opposite" in message
+    assert "jacobian_kernel differs from central differences" in message

@@ -21,22 +21,18 @@ from numba import njit
 
 from softcell.components.contracts import BotInteraction
 from softcell.components.hookspecs import hookimpl
-from softcell.engine.kernels.ellipse import deepest_point
+from softcell.engine.kernels.ellipse import coarse_deepest, refine_deepest
 from softcell.model.parameters import ParameterSpec
 from softcell.settings import CONTACT_CUTOFF_LENGTHS, LEAN_JIT
 
 
 @njit(**LEAN_JIT)
-def bot_repulsion_kernel(pose_a, pose_b, context, coefficients, out):
-    """coefficients = [F_c (N), lambda_b (cm), cut-off (cm), reach (cm)]; context[1:3] = a, b."""
-    force, length = coefficients[0], coefficients[1]
-    cutoff, reach = coefficients[2], coefficients[3]
-    a, b = context[1], context[2]
-    dx, dy = pose_b[0] - pose_a[0], pose_b[1] - pose_a[1]
-    if dx * dx + dy * dy > reach * reach:
-        return
-    rho_a, gax, gay, eax, eay = deepest_point(pose_a, pose_b, a, b)  # a point of A, against B
-    rho_b, gbx, gby, ebx, eby = deepest_point(pose_b, pose_a, a, b)  # a point of B, against A
+def _add_forces(pose_a, pose_b, phi_a, phi_b, a, b, coefficients, out):
+    """Add the forces on both bots into ``out[0:6]``, each way's deepest point found by
+    Newton's method from the parameters ``phi_a`` (on A) and ``phi_b`` (on B)."""
+    force, length, cutoff = coefficients[0], coefficients[1], coefficients[2]
+    rho_a, gax, gay, eax, eay, _ = refine_deepest(phi_a, pose_a, pose_b, a, b)  # A vs B
+    rho_b, gbx, gby, ebx, eby, _ = refine_deepest(phi_b, pose_b, pose_a, a, b)  # B vs A
     gap = 0.5 * (rho_a + rho_b)
     if gap > cutoff:
         return
@@ -51,6 +47,51 @@ def bot_repulsion_kernel(pose_a, pose_b, context, coefficients, out):
     out[3] += w * (gbx - gax)
     out[4] += w * (gby - gay)
     out[5] += w * ((ebx * gby - eby * gbx) - (dax * gay - day * gax))
+
+
+@njit(**LEAN_JIT)
+def _far(pose_a, pose_b, reach):
+    dx, dy = pose_b[0] - pose_a[0], pose_b[1] - pose_a[1]
+    return dx * dx + dy * dy > reach * reach
+
+
+@njit(**LEAN_JIT)
+def bot_repulsion_kernel(pose_a, pose_b, context, coefficients, out):
+    """coefficients = [F_c (N), lambda_b (cm), cut-off (cm), reach (cm)]; context[1:3] = a, b."""
+    a, b = context[1], context[2]
+    if _far(pose_a, pose_b, coefficients[3]):
+        return
+    phi_a = coarse_deepest(pose_a, pose_b, a, b)
+    phi_b = coarse_deepest(pose_b, pose_a, a, b)
+    _add_forces(pose_a, pose_b, phi_a, phi_b, a, b, coefficients, out)
+
+
+@njit(**LEAN_JIT)
+def bot_repulsion_jacobian(pose_a, pose_b, context, coefficients, steps, scratch, jac):
+    """Central differences of :func:`bot_repulsion_kernel`, each perturbed evaluation's
+    deepest points found by Newton's method from the unperturbed ones (the same minimum
+    as the kernel's search finds, without the search)."""
+    a, b = context[1], context[2]
+    if _far(pose_a, pose_b, coefficients[3]):
+        return
+    phi_a = refine_deepest(coarse_deepest(pose_a, pose_b, a, b), pose_a, pose_b, a, b)[5]
+    phi_b = refine_deepest(coarse_deepest(pose_b, pose_a, a, b), pose_b, pose_a, a, b)[5]
+    plus, minus = scratch[0:6], scratch[6:12]
+    qa, qb = scratch[12:15], scratch[15:18]
+    for j in range(6):
+        for c in range(3):
+            qa[c] = pose_a[c]
+            qb[c] = pose_b[c]
+        h = steps[6 + j % 3]
+        moved = qa if j < 3 else qb
+        moved[j % 3] += h
+        plus[:] = 0.0
+        _add_forces(qa, qb, phi_a, phi_b, a, b, coefficients, plus)
+        moved[j % 3] -= 2.0 * h
+        minus[:] = 0.0
+        _add_forces(qa, qb, phi_a, phi_b, a, b, coefficients, minus)
+        for c in range(6):
+            jac[c, j] += (plus[c] - minus[c]) / (2.0 * h)
 
 
 class BotRepulsion(BotInteraction):
@@ -85,6 +126,9 @@ class BotRepulsion(BotInteraction):
 
     def pair_kernel(self):
         return bot_repulsion_kernel
+
+    def jacobian_kernel(self):
+        return bot_repulsion_jacobian
 
     def reach(self) -> float:
         """Two semi-major axes and the cut-off: bots whose centres are farther apart cannot

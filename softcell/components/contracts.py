@@ -616,7 +616,11 @@ class BotInteraction(Component):
     """
 
     kind = "bot_interaction"
-    kernels = {"pair_kernel": f"void({VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, {VECTOR})"}
+    kernels = {
+        "pair_kernel": f"void({VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, {VECTOR})",
+        "jacobian_kernel": f"void({VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, {VECTOR}, "
+        "float64[:, ::1])",
+    }
 
     @abstractmethod
     def pair_kernel(self) -> Callable[..., None]:
@@ -635,6 +639,21 @@ class BotInteraction(Component):
         the tests check the built-in's. It must not allocate, and must add nothing when the
         bots' centres are farther apart than :meth:`reach`.
         """
+
+    def jacobian_kernel(self) -> Callable[..., None] | None:
+        """Return a compiled kernel of the interaction's Jacobian, or None (the default):
+        the engine then takes central differences of :meth:`pair_kernel`.
+
+        Kernel signature::
+
+            kernel(pose_a, pose_b, context, coefficients, steps, scratch, jac) -> None
+
+        It *adds* d out_c / d q_j into ``jac`` (float64[6, 6]; q = (x_a, y_a, theta_a, x_b,
+        y_b, theta_b), out as :meth:`pair_kernel` writes it); ``steps[6:9]`` are the engine's
+        difference steps in x, y (cm) and the heading (rad), ``scratch`` float64[24] is the
+        kernel's to use. It must not allocate.
+        """
+        return None
 
     @abstractmethod
     def reach(self) -> float:

@@ -206,3 +206,41 @@ def compose_interactions(interactions) -> Callable[..., None]:
     source = _PREAMBLE + "\n".join(lines) + "\n"
     names = _names(list(bindings.values())) or "no bot interactions"
     return compiled_function("bot-interactions", source, "interact", bindings, names)
+
+
+def compose_interaction_jacobians(interactions) -> Callable[..., None]:
+    """The bot interactions' Jacobians summed: ``interact_jacobian(pose_a, pose_b, context,
+    coefficients, steps, scratch, jac)`` adds each one's d out / d (pose_a, pose_b) into
+    ``jac`` (float64[6, 6]): its ``jacobian_kernel``, or central differences of its
+    ``pair_kernel`` (``templates/fd_interaction.py``)."""
+    bindings: dict[str, object] = {}
+    lines = [
+        "@njit(**JIT_FLAGS)\ndef interact_jacobian(pose_a, pose_b, context, coefficients, "
+        "steps, scratch, jac):"
+    ]
+    names = []
+    for n, interaction in enumerate(interactions):
+        kernel = interaction.jacobian_kernel()
+        if kernel is None:
+            kernel = compiled_function(
+                "fd-interaction",
+                template(__package__ + ".templates", "fd_interaction.py"),
+                "fd_interaction",
+                {"pair": interaction.pair_kernel()},
+                _names([interaction.pair_kernel()]),
+            )
+            names.append(f"differences of {_names([interaction.pair_kernel()])}")
+        else:
+            names.append(_names([kernel]))
+        bindings[f"j{n}"] = kernel
+        lines.append(f"    j{n}(pose_a, pose_b, context, coefficients[{n}], steps, scratch, jac)")
+    if len(lines) == 1:
+        lines.append("    pass")
+    source = _PREAMBLE + "\n".join(lines) + "\n"
+    return compiled_function(
+        "bot-interaction-jacobians",
+        source,
+        "interact_jacobian",
+        bindings,
+        " + ".join(names) or "no bot interactions",
+    )

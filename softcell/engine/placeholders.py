@@ -42,3 +42,8 @@ def no_event(phase, datum, sense, coefficients):
 @njit(**JIT)
 def no_interaction(pose_a, pose_b, context, coefficients, out):
     """Stands for the bots' interactions (there are none): adds nothing to ``out``."""
+
+
+@njit(**JIT)
+def no_interaction_jacobian(pose_a, pose_b, context, coefficients, steps, scratch, jac):
+    """Stands for the bots' interactions' Jacobian (there are none): adds nothing."""

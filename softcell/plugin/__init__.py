@@ -2,14 +2,16 @@
 
 A plugin is a module with functions named after the hooks (``softcell_energy_terms``,
 ``softcell_driving_protocols``, ``softcell_friction_laws``, ``softcell_integrators``,
-``softcell_stopgo_detectors``, ``softcell_pair_terms``), each marked with :data:`hookimpl`
+``softcell_stopgo_detectors``, ``softcell_pair_terms``, ``softcell_bot_interactions``),
+each marked with :data:`hookimpl`
 and returning a list of component classes, registered under the entry-point group
 ``softcell``. ``docs/plugins.md`` is the tutorial; the names below are the public interface,
 and everything else in softcell is private and may move.
 
 Contracts (subclass one per component)
     :class:`EnergyTerm`, :class:`DrivingProtocol`, :class:`FrictionLaw`, :class:`Integrator`,
-    :class:`StopGoDetector`, :class:`PairTerm` (how two cells' membranes meet), their base
+    :class:`StopGoDetector`, :class:`PairTerm` (how two cells' membranes meet),
+    :class:`BotInteraction` (how two bots in one ring meet), their base
     :class:`Component`; what an integrator returns:
     :class:`Stepper`; what a protocol draws: :class:`Schedule`; what its event kernel senses:
     :class:`Sense`; what an integrator composes: :class:`Model`.
@@ -36,6 +38,7 @@ import warnings
 from typing import Any
 
 from softcell.components.contracts import (
+    BotInteraction,
     Component,
     DrivingProtocol,
     EnergyTerm,
@@ -63,6 +66,7 @@ __all__ = [
     "PHASE_UNKNOWN",
     "STOP",
     "STOPGO_UNKNOWN",
+    "BotInteraction",
     "Component",
     "ContractError",
     "DrivingProtocol",

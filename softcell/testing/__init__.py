@@ -3,7 +3,8 @@
 - :func:`registered`: a context manager under which the process-wide registry also holds
   the given plugin modules or objects (register a plugin for one test, without installing it).
 - :func:`check_component` (and :func:`check_energy_term`, :func:`check_friction_law`,
-  :func:`check_driving_protocol`, :func:`check_stopgo_detector`, :func:`check_pair_term`): a
+  :func:`check_driving_protocol`, :func:`check_stopgo_detector`, :func:`check_pair_term`,
+  :func:`check_bot_interaction`): a
   component checked against
   its contract (:mod:`softcell.testing.checks`), for a plugin's tests.
 - :mod:`softcell.testing.strategies`: Hypothesis strategies (needs the ``test`` extra).
@@ -13,6 +14,7 @@
 
 from softcell.components.registry import registered
 from softcell.testing.checks import (
+    check_bot_interaction,
     check_component,
     check_driving_protocol,
     check_energy_term,
@@ -22,6 +24,7 @@ from softcell.testing.checks import (
 )
 
 __all__ = [
+    "check_bot_interaction",
     "check_component",
     "check_driving_protocol",
     "check_energy_term",

@@ -41,6 +41,7 @@ import numpy as np
 
 from softcell.components.contracts import (
     SENSE_SIZE,
+    BotInteraction,
     DrivingProtocol,
     EnergyTerm,
     FrictionLaw,
@@ -656,12 +657,115 @@ def check_pair_term(
     _fail(cls, problems)
 
 
+@_contract_calls
+def check_bot_interaction(
+    cls: type[BotInteraction],
+    values: Mapping[str, Any] | None = None,
+    *,
+    pairs: int = 200,
+    conserves: bool = True,
+    rtol: float = 1e-5,
+    seed: int = 0,
+) -> None:
+    """Check a bot interaction on ``pairs`` random placements of two bots, their centres up
+    to 1.2 times its reach apart (drawn from ``seed``).
+
+    Parameters
+    ----------
+    cls : BotInteraction subclass
+        The interaction.
+    values : mapping, optional
+        Parameter values (each in its declared unit); the rest take their defaults.
+    pairs : int
+        Placements checked.
+    conserves : bool
+        Whether the forces must be equal and opposite and the torques balance about the
+        origin (Newton's third law; False for an interaction meant to break it).
+    rtol : float
+        Allowed departure, relative to the largest generalized force of the placement, of
+        the momentum sums and of the ``jacobian_kernel`` (if it has one) from central
+        differences of the kernel.
+
+    Raises
+    ------
+    AssertionError
+        Listing every violation: a reach that is not finite and > 0 (cm), a non-finite
+        output, an output beyond the reach, forces that do not balance, a Jacobian that
+        differs from central differences.
+    """
+    interaction, params = _build(cls, values)
+    reach = float(interaction.reach())
+    if not (math.isfinite(reach) and reach > 0):
+        _fail(cls, [f"reach() = {reach} cm: must be finite and > 0"])
+    kernel, coef = interaction.pair_kernel(), np.ascontiguousarray(interaction.coefficients())
+    jacobian = interaction.jacobian_kernel()
+    a, b = float(params.bot_semi_major), float(params.bot_semi_minor)
+    context = np.array([float(params.membrane_length), a, b])
+    steps = np.array([1e-7 * context[0] / (2 * math.pi)] * 8 + [1e-7])
+    rng = np.random.default_rng(seed)
+    problems: list[str] = []
+
+    def forces(pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+        out = np.zeros(6)
+        kernel(pa, pb, context, coef, out)
+        return out
+
+    for _ in range(pairs):
+        pa = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-math.pi, math.pi)])
+        angle, distance = rng.uniform(0, 2 * math.pi), rng.uniform(0.3 * b, 1.2 * reach)
+        pb = np.array(
+            [pa[0] + distance * math.cos(angle), pa[1] + distance * math.sin(angle),
+             rng.uniform(-math.pi, math.pi)]
+        )  # fmt: skip
+        out = forces(pa, pb)
+        where = f"at centres {distance:.3g} cm apart"
+        if not np.isfinite(out).all():
+            problems.append(f"pair_kernel gives a non-finite value {where}")
+            continue
+        if distance > reach * (1 + 1e-9) and np.any(out != 0.0):
+            problems.append(f"pair_kernel adds forces beyond reach() = {reach:g} cm")
+        scale = float(np.abs(out).max())
+        if scale == 0.0:
+            continue
+        if conserves:
+            net = np.abs(out[:2] + out[3:5]).max()
+            spin = pa[0] * out[1] - pa[1] * out[0] + out[2] + pb[0] * out[4] - pb[1] * out[3]
+            spin += out[5]
+            if net > rtol * scale or abs(spin) > rtol * scale * (1 + abs(pb[:2]).max()):
+                problems.append(
+                    f"forces are not equal and opposite, or torques do not balance, {where} "
+                    f"(net force {net:.2g} N, net torque {spin:.2g} N cm; conserves=False "
+                    "for an interaction meant to break Newton's third law)"
+                )
+        if jacobian is not None:
+            jac, scratch = np.zeros((6, 6)), np.zeros(24)
+            jacobian(pa, pb, context, coef, steps, scratch, jac)
+            numeric = np.zeros((6, 6))
+            for j in range(6):
+                h = 1e-6 * (1.0 if j % 3 == 2 else max(a, 1.0))
+                plus, minus = np.concatenate([pa, pb]), np.concatenate([pa, pb])
+                plus[j] += h
+                minus[j] -= h
+                numeric[:, j] = (forces(plus[:3], plus[3:]) - forces(minus[:3], minus[3:])) / (
+                    2 * h
+                )
+            size = max(float(np.abs(numeric).max()), 1e-300)
+            worst = float(np.abs(jac - numeric).max()) / size
+            if worst > 1e3 * rtol:
+                problems.append(
+                    f"jacobian_kernel differs from central differences of pair_kernel {where} "
+                    f"by {worst:.2g} of its largest entry"
+                )
+    _fail(cls, list(dict.fromkeys(problems)))
+
+
 CHECKS: dict[type, Callable[..., None]] = {
     EnergyTerm: check_energy_term,
     FrictionLaw: check_friction_law,
     DrivingProtocol: check_driving_protocol,
     StopGoDetector: check_stopgo_detector,
     PairTerm: check_pair_term,
+    BotInteraction: check_bot_interaction,
 }
 
 
@@ -670,8 +774,9 @@ def check_component(cls: type, values: Mapping[str, Any] | None = None, **option
     that check's keyword ``options``: :func:`~softcell.testing.check_energy_term`,
     :func:`~softcell.testing.check_friction_law`,
     :func:`~softcell.testing.check_driving_protocol`,
-    :func:`~softcell.testing.check_stopgo_detector` or
-    :func:`~softcell.testing.check_pair_term`.
+    :func:`~softcell.testing.check_stopgo_detector`,
+    :func:`~softcell.testing.check_pair_term` or
+    :func:`~softcell.testing.check_bot_interaction`.
 
     Parameters
     ----------
@@ -693,5 +798,6 @@ def check_component(cls: type, values: Mapping[str, Any] | None = None, **option
         if isinstance(cls, type) and issubclass(cls, contract):
             return check(cls, values, **options)
     raise TypeError(
-        f"{cls!r} is not an energy term, friction law, driving protocol, detector or pair term"
+        f"{cls!r} is not an energy term, friction law, driving protocol, detector, pair term "
+        "or bot interaction"
     )

@@ -217,26 +217,38 @@ def _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b):
 
 
 @njit(**LEAN_JIT)
-def deepest_point(pa, pb, a, b):
-    """The point of ellipse A's boundary (pose ``pa``: x, y in cm, heading in rad) nearest
-    to, or deepest inside, ellipse B (pose ``pb``; both of semi-axes a, b in cm): the minimum
-    over phi of the signed distance rho_B(p_A(phi)), by a search over GAP_SAMPLES points and
-    Newton's method on d rho / d phi = 0 (its second derivative is exact: the distance's
-    Hessian is kk t t^T, t the tangent at the closest point).
+def coarse_deepest(pa, pb, a, b):
+    """The parameter phi (rad) of the point of ellipse A's boundary nearest to, or deepest
+    inside, ellipse B among GAP_SAMPLES evenly spaced ones (see :func:`deepest_point`),
+    visiting only those whose outward normal faces B's centre (all of them if none does)."""
+    ca, sa = math.cos(pa[2]), math.sin(pa[2])
+    cb, sb = math.cos(pb[2]), math.sin(pb[2])
+    # B's centre in A's frame: a point faces it when its normal (x / a^2, y / b^2) does
+    dx, dy = pb[0] - pa[0], pb[1] - pa[1]
+    fx, fy = ca * dx + sa * dy, -sa * dx + ca * dy
+    spacing = 2.0 * math.pi / GAP_SAMPLES
+    best, phi = math.inf, 0.0
+    for sweep in range(2):
+        for i in range(GAP_SAMPLES):
+            angle = i * spacing
+            if sweep == 0 and math.cos(angle) * fx / a + math.sin(angle) * fy / b < 0.0:
+                continue
+            rho = _boundary_rho(angle, pa, ca, sa, pb, cb, sb, a, b)[0]
+            if rho < best:
+                best, phi = rho, angle
+        if best < math.inf:
+            break
+    return phi
 
-    Returns ``(rho, gx, gy, ex, ey)``: the distance (cm, negative inside B), B's outward
-    normal at the closest point (world frame) and the point's offset from A's centre (cm).
-    At the minimum d rho / d phi = 0, so rho's derivatives with respect to the poses are
-    those at fixed phi (the envelope theorem): g for A's centre, -g for B's.
-    """
+
+@njit(**LEAN_JIT)
+def refine_deepest(phi, pa, pb, a, b):
+    """:func:`deepest_point` from the parameter ``phi`` (rad) of a point near it: Newton's
+    method on d rho / d phi = 0 within a bracket of one sample spacing on either side.
+    Returns ``(rho, gx, gy, ex, ey, phi)``."""
     ca, sa = math.cos(pa[2]), math.sin(pa[2])
     cb, sb = math.cos(pb[2]), math.sin(pb[2])
     spacing = 2.0 * math.pi / GAP_SAMPLES
-    best, phi = math.inf, 0.0
-    for i in range(GAP_SAMPLES):
-        rho = _boundary_rho(i * spacing, pa, ca, sa, pb, cb, sb, a, b)[0]
-        if rho < best:
-            best, phi = rho, i * spacing
     lo, hi = phi - spacing, phi + spacing
     for _ in range(ELLIPSE_ITERATIONS):
         rho, gx, gy, ex, ey, kk = _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b)
@@ -258,6 +270,24 @@ def deepest_point(pa, pb, a, b):
             break
         phi = new
     rho, gx, gy, ex, ey, kk = _boundary_rho(phi, pa, ca, sa, pb, cb, sb, a, b)
+    return rho, gx, gy, ex, ey, phi
+
+
+@njit(**LEAN_JIT)
+def deepest_point(pa, pb, a, b):
+    """The point of ellipse A's boundary (pose ``pa``: x, y in cm, heading in rad) nearest
+    to, or deepest inside, ellipse B (pose ``pb``; both of semi-axes a, b in cm): the minimum
+    over phi of the signed distance rho_B(p_A(phi)), by a search over GAP_SAMPLES points
+    (:func:`coarse_deepest`) and Newton's method on d rho / d phi = 0
+    (:func:`refine_deepest`; its second derivative is exact: the distance's Hessian is
+    kk t t^T, t the tangent at the closest point).
+
+    Returns ``(rho, gx, gy, ex, ey)``: the distance (cm, negative inside B), B's outward
+    normal at the closest point (world frame) and the point's offset from A's centre (cm).
+    At the minimum d rho / d phi = 0, so rho's derivatives with respect to the poses are
+    those at fixed phi (the envelope theorem): g for A's centre, -g for B's.
+    """
+    rho, gx, gy, ex, ey, _ = refine_deepest(coarse_deepest(pa, pb, a, b), pa, pb, a, b)
     return rho, gx, gy, ex, ey
 
 

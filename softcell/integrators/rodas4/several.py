@@ -19,7 +19,12 @@ import numpy as np
 from softcell.components.contracts import Schedule
 from softcell.engine import Model, SimulationError, nonlinear_friction, placeholders
 from softcell.engine.compiled import compile_module
-from softcell.engine.compose import compose_bot, compose_interactions, template
+from softcell.engine.compose import (
+    compose_bot,
+    compose_interaction_jacobians,
+    compose_interactions,
+    template,
+)
 from softcell.engine.kernels.linalg import lu_workspace
 from softcell.errors import ParameterError
 from softcell.integrators.rodas4 import (
@@ -71,7 +76,8 @@ class BotsWork(NamedTuple):
     pose_a: np.ndarray
     pose_b: np.ndarray
     pair_out: np.ndarray
-    plus: np.ndarray
+    pair_jac: np.ndarray
+    pair_scratch: np.ndarray
 
 
 class StepWork(NamedTuple):
@@ -169,6 +175,9 @@ def compiled_bots(model: Model):
             "interact": compose_interactions(interactions)
             if interactions
             else placeholders.no_interaction,
+            "interact_jacobian": compose_interaction_jacobians(interactions)
+            if interactions
+            else placeholders.no_interaction_jacobian,
         },
         " + ".join(t.name for t in model.terms)
         + f"; {model.protocol.name}; bots "
@@ -218,7 +227,8 @@ class BotsStepper:
             pose_a=np.zeros(3),
             pose_b=np.zeros(3),
             pair_out=np.zeros(6),
-            plus=np.zeros(6),
+            pair_jac=np.zeros((6, 6)),
+            pair_scratch=np.zeros(24),
         )
         self.step = StepWork(
             jac=np.zeros((nu, nu)),

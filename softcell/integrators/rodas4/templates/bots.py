@@ -10,10 +10,11 @@ Bound: ``rhs_m``, ``jacobian_m`` (the single-bot loop's, from ``loop.py``, of th
 do not read the pose; its pose slot holds bot 0's and its pose rows are not read),
 ``rhs_c``, ``jacobian_c`` (the same of the terms that read it, with the drive; evaluated once
 per bot), ``HAS_BOT``, ``bot_forces``, ``bot_hessians`` (the energies of a bot alone, summed
-over every term, :func:`softcell.engine.compose.compose_bot`), ``HAS_INTERACT`` and
-``interact`` (the bot interactions' kernels summed). The interactions' Jacobian is taken by
-central differences of ``interact`` (steps ``ws.steps[6:9]``: 1e-7 l0 / 2 pi in x and y,
-1e-7 rad). Only the viscous friction law (the membrane's velocities of the parts are summed)
+over every term, :func:`softcell.engine.compose.compose_bot`), ``HAS_INTERACT``, ``interact``
+and ``interact_jacobian`` (the bot interactions' kernels and Jacobians summed,
+:func:`softcell.engine.compose.compose_interaction_jacobians`: each one's own, or central
+differences of its kernel with steps ``ws.steps[6:9]``, 1e-7 l0 / 2 pi in x and y and 1e-7
+rad). Only the viscous friction law (the membrane's velocities of the parts are summed)
 and no state events.
 """
 
@@ -56,8 +57,9 @@ if TYPE_CHECKING:  # bound by the loader before the module runs: BOUND, and the 
         bot_hessians,
         HAS_INTERACT,
         interact,
+        interact_jacobian,
         JIT_FLAGS,
-    ) = (None,) * 10
+    ) = (None,) * 11
 
 
 #: The names this template expects the loader to bind (besides the numba flags).
@@ -71,6 +73,7 @@ BOUND = (
     "bot_hessians",
     "HAS_INTERACT",
     "interact",
+    "interact_jacobian",
 )
 
 
@@ -137,24 +140,21 @@ def bots_rhs(u, phases, data, out, bp, bw):
 
 @njit(**JIT_FLAGS)
 def _interaction_jacobian(u, m2, a, b, bp, bw, jac):
-    """Add the pair (a, b)'s interaction Jacobian by central differences of ``interact``."""
+    """Add the pair (a, b)'s interaction Jacobian, scaled by the bots' mobilities."""
     mob = bp.bot_mobility
-    steps = bw.ws_c.steps
+    for c in range(3):
+        bw.pose_a[c] = u[m2 + 3 * a + c]
+        bw.pose_b[c] = u[m2 + 3 * b + c]
+    bw.pair_jac[:, :] = 0.0
+    interact_jacobian(
+        bw.pose_a, bw.pose_b, bp.context, bp.interactions, bw.ws_c.steps, bw.pair_scratch,
+        bw.pair_jac,
+    )  # fmt: skip
     for j in range(6):
-        bot = a if j < 3 else b
-        col = m2 + 3 * bot + j % 3
-        h = steps[6 + j % 3]
-        saved = u[col]
-        u[col] = saved + h
-        _pair(u, m2, a, b, bp, bw)
-        for c in range(6):
-            bw.plus[c] = bw.pair_out[c]
-        u[col] = saved - h
-        _pair(u, m2, a, b, bp, bw)
-        u[col] = saved
+        col = m2 + 3 * (a if j < 3 else b) + j % 3
         for c in range(3):
-            jac[m2 + 3 * a + c, col] += mob[c] * (bw.plus[c] - bw.pair_out[c]) / (2.0 * h)
-            jac[m2 + 3 * b + c, col] += mob[c] * (bw.plus[3 + c] - bw.pair_out[3 + c]) / (2.0 * h)
+            jac[m2 + 3 * a + c, col] += mob[c] * bw.pair_jac[c, j]
+            jac[m2 + 3 * b + c, col] += mob[c] * bw.pair_jac[3 + c, j]
 
 
 @njit(**JIT_FLAGS)
