@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.path import Path as Polygon
@@ -319,9 +320,7 @@ def test_bots_that_cannot_run_are_one_line_before_anything_runs(tmp_path, capsys
     assert not out.exists()
 
 
-def test_a_file_of_several_bots_follows_the_schema_and_the_commands_say_what_they_cannot(
-    tmp_path, capsys
-):
+def test_a_file_of_several_bots_follows_the_schema_and_the_commands_take_it(tmp_path, capsys):
     out = tmp_path / "k2"
     argv = ["simulate", "--radius", "8", "--duration", "0.3", "--quiet", "-o", str(out)]
     assert main([*argv, "--bots", "2", "--seed", "5"]) == 0
@@ -331,9 +330,16 @@ def test_a_file_of_several_bots_follows_the_schema_and_the_commands_say_what_the
     assert ds["bot_phase_fine"].dims == ("realization", "fine_time", "bot")
     assert ds.sizes["bot"] == 2
     np.testing.assert_array_equal(ds["bot_start_x"].values[0], ds["bot_x"].values[0, 0])
+    assert main(["animate", str(path), "-o", str(tmp_path / "a.gif"), "--quiet"]) == 0
+    assert main(["export", str(path), "-o", str(tmp_path / "a.gsd")]) == 0
+    import gsd.hoomd
+
+    with gsd.hoomd.open(str(tmp_path / "a.gsd")) as trajectory:
+        frame = trajectory[0]
+        assert int((frame.particles.typeid == 1).sum()) == 2  # two bots
     capsys.readouterr()
-    assert main(["animate", str(path), "-o", str(tmp_path / "a.gif")]) == 2
-    assert "animate does not handle files of several bots" in capsys.readouterr().err
+    assert main(["render", str(path), "-o", str(tmp_path / "r.mp4")]) == 2
+    assert "render does not handle files of several bots" in capsys.readouterr().err
 
 
 def test_an_interrupted_ring_of_bots_resumes_to_the_same_bytes(tmp_path, monkeypatch):
@@ -462,3 +468,80 @@ def test_rodas4_follows_the_explicit_scheme_with_several_bots():
     assert np.abs(pose_r - pose_e).max() <= 5e-5
     assert np.abs(modes_r - modes_e).max() <= 5e-5
     assert np.abs(pose_r[-1] - poses.reshape(-1)).max() > 0.1  # the bots moved
+
+
+# -- the analysis of several bots -------------------------------------------------------------
+
+
+def _ring(points: np.ndarray, bots: np.ndarray, headings: np.ndarray) -> xr.Dataset:
+    """One realization's samples as ring_statistics reads them: points (T, N) complex,
+    bots (T, K) complex, headings (T, K) rad; the cell's centre the points' mean."""
+    centre = points.mean(axis=1)
+    return xr.Dataset(
+        {
+            "membrane_x": (("time", "node"), points.real),
+            "membrane_y": (("time", "node"), points.imag),
+            "cell_x": ("time", centre.real),
+            "cell_y": ("time", centre.imag),
+            "bot_x": (("time", "bot"), bots.real),
+            "bot_y": (("time", "bot"), bots.imag),
+            "bot_angle": (("time", "bot"), headings),
+        }
+    )
+
+
+def test_the_ring_statistics_of_shapes_and_placements_known_exactly():
+    from softcell.analysis.bots import SHAPE_MODES, ring_statistics
+
+    xi = np.linspace(0, 2 * np.pi, 512, endpoint=False)
+    # a three-lobed ring r = 10 (1 + 0.04 cos 3 phi): r_3 / r_0 = 0.02, the others 0
+    lobed = (10 * (1 + 0.04 * np.cos(3 * xi)) * np.exp(1j * xi))[None]
+    # four bots on the circle of radius 8, heading counter-clockwise around the centre
+    angles = np.array([0.1, 1.7, 3.3, 4.9])
+    bots = (8 * np.exp(1j * angles))[None]
+    stats = ring_statistics(_ring(lobed, bots, (angles + np.pi / 2)[None]), a=1.5)
+    expected = np.where(SHAPE_MODES == 3, 0.02, 0.0)
+    np.testing.assert_allclose(stats["membrane_shape_amplitude"], expected, atol=2e-5)
+    assert stats["bots_circulation"] == pytest.approx(1.0)
+    assert stats["bots_circulation_abs"] == pytest.approx(1.0)
+    assert stats["bots_polar_order"] == pytest.approx(0.0, abs=0.25)  # four spread headings
+    # within 2 a = 3 cm of the lobed ring (radius 9.6 .. 10.4 cm): all four bots at 8 cm
+    assert stats["bots_boundary_fraction"] == 1.0
+    # an ellipse of semi-axes 12 and 8 sampled evenly in its parameter: gyration eigenvalues
+    # 144 / 2 and 64 / 2, asphericity ((144 - 64) / (144 + 64))^2
+    ellipse = (12 * np.cos(xi) + 8j * np.sin(xi))[None]
+    aligned = np.zeros((1, 2))
+    inner = np.array([[0.0, 4.0j]])  # 8 and 4 cm from the ellipse: none within 3 cm
+    stats = ring_statistics(_ring(ellipse, inner, aligned), a=1.5)
+    assert stats["membrane_asphericity"] == pytest.approx((80 / 208) ** 2, rel=1e-9)
+    assert stats["bots_polar_order"] == 1.0
+    assert stats["bots_boundary_fraction"] == 0.0
+
+
+def test_the_analysis_of_several_bots_has_each_bot_and_the_cell_as_one_bot_sees_it(tmp_path):
+    """Each bot's values split back into (realization, bot); the cell's quantities, which
+    every bot shares, are those of the analysis of the ring seen through bot 0 alone."""
+    import softcell
+
+    config = RunConfig(parameters={"radius": 10.0, "duration": 30.0}, bots={"count": 3})
+    files = simulate(config, tmp_path / "k3", seed=2, realizations=2, progress=False)
+    ds = xr.concat([open_dataset(f) for f in files], dim="realization")
+    options = {"discard": 10.0}
+    several = softcell.analyze(ds, options)
+    one = softcell.analyze(ds.isel(bot=0).drop_vars(["bot_start_x", "bot_start_y",
+                                                     "bot_start_angle"]), options)  # fmt: skip
+    assert several["mean_speed_realization"].dims == ("body", "realization", "bot")
+    for name in ("msd_slope", "ballistic_velocity", "mean_speed", "mean_go_duration"):
+        np.testing.assert_allclose(
+            several[name].sel(body="cell").values, one[name].sel(body="cell").values,
+            rtol=1e-12, equal_nan=True,
+        )  # fmt: skip
+    per_bot = several["mean_speed_realization"].sel(body="bot").values
+    np.testing.assert_allclose(
+        per_bot[:, 0], one["mean_speed_realization"].sel(body="bot").values, rtol=1e-12
+    )
+    for name in ("bots_boundary_fraction", "bots_polar_order", "membrane_asphericity"):
+        values = several[f"{name}_realization"].values
+        assert several[name].values == pytest.approx(values.mean())
+        assert several[f"{name}_error"].values == pytest.approx(values.std(ddof=1) / np.sqrt(2))
+        assert "across the 2 realizations" in several[f"{name}_error"].attrs["error"]

@@ -869,9 +869,11 @@ def analyze(
             "softcell.open_dataset)"
         )
     from softcell.analysis import collective as crowd
-    from softcell.schema import refuse_several_bots
 
-    refuse_several_bots(ds, "analyze")
+    if "bot" in ds.dims:
+        from softcell.analysis.bots import analyze_bots
+
+        return analyze_bots(ds, options, progress=progress, registry=registry, analyze=analyze)
     collective, options = crowd.split_crowd_options(options)
     if "cell" in ds.dims:
         return crowd.analyze_assembly(

@@ -31,7 +31,6 @@ from softcell.engine.interrupt import deferred
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.io.files import gsd_attributes as gsd_attributes  # read here, kept with the files
-from softcell.schema import refuse_several_bots
 
 #: The GSD particle types, in order of their type ids.
 TYPES = ("membrane", "bot")
@@ -87,8 +86,8 @@ def _check_simulation(ds: xr.Dataset) -> None:
             f"export takes a simulation file (softcell simulate); this one is a softcell "
             f"{origin or 'unknown'} file"
         )
-    refuse_several_bots(ds, "export")
-    extra = [d for d in ds.dims if d not in ("realization", "time", "cell", "node", "fine_time")]
+    allowed = ("realization", "time", "cell", "node", "fine_time", "bot")
+    extra = [d for d in ds.dims if d not in allowed]
     if extra:
         raise SoftcellError(
             f"export takes one parameter point; this input sweeps {', '.join(extra)} "
@@ -242,7 +241,8 @@ def to_movement(
     ``confidence`` (time, keypoints, individuals), with the attributes ``ds_type = "poses"``,
     ``source_software``, ``fps`` and ``time_unit = "seconds"``. The keypoints are
     bot, bot_front and cell (``KEYPOINTS``); the individuals are the cells (one, or an
-    assembly's). Time keeps its values (s). A tracked frame whose bot or membrane was lost
+    assembly's), or the bots of a ring of several (each with the ring's centre as its cell
+    keypoint). Time keeps its values (s). A tracked frame whose bot or membrane was lost
     has NaN positions and confidence 0 for those keypoints; everything else has
     confidence 1.
 
@@ -323,13 +323,18 @@ def _poses(one: xr.Dataset, ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, lis
 
     angle = cells("bot_angle")
     bx, by = cells("bot_x"), cells("bot_y")
+    # several bots in one ring: the individuals are the bots, each with the ring's centre
+    cx, cy = (np.broadcast_to(cells(n), bx.shape) for n in ("cell_x", "cell_y"))
     points = [
         (bx, by),
         (bx + semi_major * np.cos(angle), by + semi_major * np.sin(angle)),
-        (cells("cell_x"), cells("cell_y")),
+        (cx, cy),
     ]
     position = np.stack([np.stack(p, axis=1) for p in points], axis=2)
     confidence = np.isfinite(position).all(axis=1).astype(np.float64)
     count = position.shape[-1]
-    names = ["cell"] if count == 1 else [f"cell_{c}" for c in range(count)]
+    if "bot" in one.dims:
+        names = [f"bot_{j}" for j in range(count)]
+    else:
+        names = ["cell"] if count == 1 else [f"cell_{c}" for c in range(count)]
     return position, confidence, names

@@ -23,7 +23,7 @@ from softcell._version import __version__
 from softcell.errors import SoftcellError
 from softcell.io.files import atomic_write
 from softcell.model.obstacle_layout import Post, parse_obstacles
-from softcell.schema import refuse_several_bots, validate
+from softcell.schema import validate
 
 #: What each suffix is written as: (codec, pixel format).
 FORMATS = {".mp4": ("libx264", "yuv420p"), ".gif": ("gif", "rgb8")}
@@ -166,8 +166,7 @@ def animate(
     path = Path(out)
     _check_request(path, fps=fps, speed=speed, trail=trail, height=height, crf=crf)
     validate(ds)
-    refuse_several_bots(ds, "animate")
-    swept = [d for d in ds["bot_x"].dims if d not in ("realization", "time", "cell")]
+    swept = [d for d in ds["bot_x"].dims if d not in ("realization", "time", "cell", "bot")]
     if swept:
         raise SoftcellError(
             f"this is a sweep over {', '.join(swept)}: choose one point, ds.isel({swept[0]}=0) "
@@ -241,8 +240,18 @@ class _Scene:
         self.mx, self.my = ds["membrane_x"].values, ds["membrane_y"].values
         self.t, bodies = _bodies(ds)
         if not crowd:  # a cell axis of one, so both cases index alike
-            bodies = {k: v[..., None] for k, v in bodies.items()}
+            several = "bot" in ds.dims  # the bots' arrays [R, T, K] get the cell axis first
+            bodies = {
+                k: v[..., None, :] if several and k.startswith("bot_") else v[..., None]
+                for k, v in bodies.items()
+            }
             self.mx, self.my = self.mx[:, :, None], self.my[:, :, None]
+        # a bot axis last: [R, T, C, K], one bot per cell but in a ring of several
+        bodies = {
+            k: v if not k.startswith("bot_") or v.ndim == 4 else v[..., None]
+            for k, v in bodies.items()
+        }
+        self.bots = bodies["bot_x"].shape[-1]
         self.bodies = bodies
         self.go = _go(bodies["cell_x"], bodies["cell_y"], self.t, threshold)  # [R, C, T]
         dpi = 100
@@ -316,14 +325,16 @@ class _Scene:
         cells = []
         for _ in range(self.cells):
             (membrane,) = ax.plot([], [], color="#c0392b", lw=1.6)
-            (bot_trail,) = ax.plot([], [], color="0.55", lw=0.7)
+            trails = [ax.plot([], [], color="0.55", lw=0.7)[0] for _ in range(self.bots)]
             centre = LineCollection([], linewidths=1.8)
             ax.add_collection(centre)
-            body = Ellipse((0, 0), 2 * self.a, 2 * self.b, color="0.2")
-            ax.add_patch(body)
-            (head,) = ax.plot([], [], color="w", lw=1.5)
-            cells.append({"membrane": membrane, "bot": bot_trail, "centre": centre,
-                          "body": body, "head": head})  # fmt: skip
+            bodies, heads = [], []
+            for _ in range(self.bots):
+                bodies.append(Ellipse((0, 0), 2 * self.a, 2 * self.b, color="0.2"))
+                ax.add_patch(bodies[-1])
+                heads.append(ax.plot([], [], color="w", lw=1.5)[0])
+            cells.append({"membrane": membrane, "bot": trails, "centre": centre,
+                          "body": bodies, "head": heads})  # fmt: skip
         return {"cells": cells}
 
     def _fixtures(self, ax) -> None:
@@ -346,6 +357,22 @@ class _Scene:
                            (o.x1 - n[0], o.y1 - n[1]), (o.x0 - n[0], o.y0 - n[1])]  # fmt: skip
                 ax.add_patch(Polygon(corners, color="0.35"))
 
+    def _draw_bot(self, art: dict, r: int, c: int, j: int, span: tuple, shift) -> None:
+        """Bot j of cell c of panel r: its trail over samples span[0]..span[1], its body."""
+        k0, k = span
+        bx = self.bodies["bot_x"][r, k0 : k + 1, c, j] + shift[0]
+        by = self.bodies["bot_y"][r, k0 : k + 1, c, j] + shift[1]
+        art["bot"][j].set_data(bx, by)
+        angle = self.bodies["bot_angle"][r, k, c, j]
+        centre = (
+            self.bodies["bot_x"][r, k, c, j] + shift[0],
+            self.bodies["bot_y"][r, k, c, j] + shift[1],
+        )
+        art["body"][j].set_center(centre)
+        art["body"][j].set_angle(math.degrees(angle))
+        tip = (centre[0] + self.a * math.cos(angle), centre[1] + self.a * math.sin(angle))
+        art["head"][j].set_data([centre[0], tip[0]], [centre[1], tip[1]])
+
     def draw(self, t: float) -> np.ndarray:
         """The frame at simulated time ``t`` (s) as uint8[H, W, 3]."""
         m = int(np.argmin(np.abs(self.mt - t)))
@@ -362,23 +389,13 @@ class _Scene:
                 mx = np.append(self.mx[r, m, c], self.mx[r, m, c][0]) + shift[0]
                 my = np.append(self.my[r, m, c], self.my[r, m, c][0]) + shift[1]
                 art["membrane"].set_data(mx, my)
-                bx = self.bodies["bot_x"][r, k0 : k + 1, c] + shift[0]
-                by = self.bodies["bot_y"][r, k0 : k + 1, c] + shift[1]
-                art["bot"].set_data(bx, by)
                 points = np.stack([cx + shift[0], cy + shift[1]], axis=1)
                 segments = np.stack([points[:-1], points[1:]], axis=1)
                 go = self.go[r, c, k0:k]
                 art["centre"].set_segments(segments)
                 art["centre"].set_color([GO_COLOUR if g else STOP_COLOUR for g in go])
-                angle = self.bodies["bot_angle"][r, k, c]
-                centre = (
-                    self.bodies["bot_x"][r, k, c] + shift[0],
-                    self.bodies["bot_y"][r, k, c] + shift[1],
-                )
-                art["body"].set_center(centre)
-                art["body"].set_angle(math.degrees(angle))
-                tip = (centre[0] + self.a * math.cos(angle), centre[1] + self.a * math.sin(angle))
-                art["head"].set_data([centre[0], tip[0]], [centre[1], tip[1]])
+                for j in range(self.bots):
+                    self._draw_bot(art, r, c, j, (k0, k), shift)
         self.stamp.set_text(f"t = {self.t[k]:.2f} s")
         self.canvas.draw()
         return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()

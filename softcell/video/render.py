@@ -25,7 +25,7 @@ import xarray as xr
 from softcell.errors import SoftcellError
 from softcell.io.files import StorageError, atomic_write, storage_problem
 from softcell.model.limits import check_seed
-from softcell.schema import validate
+from softcell.schema import refuse_several_bots, validate
 from softcell.video.track import codec, count_frames
 from softcell.video.tracker import Frame
 
@@ -302,11 +302,17 @@ def _check_render_arguments(**values: float) -> None:
             )
 
 
+def _swept(ds: xr.Dataset) -> tuple[str, ...]:
+    """The sweep dims of ``ds``: those of ``cell_x`` before its realization dim."""
+    dims = ds["cell_x"].dims
+    return tuple(dims[: dims.index("realization")])
+
+
 def check_point(ds: xr.Dataset, point: dict[str, int], option: str = "point") -> None:
     """Raise a one-line :class:`SoftcellError` unless ``point`` names sweep dimensions of
     ``ds`` (those of ``bot_x`` before realization and time) with an index in range each; the
     message names ``option``, the dimensions there are and each index's value."""
-    swept = ds["bot_x"].dims[:-2]
+    swept = _swept(ds)
     for dim, index in point.items():
         if dim not in swept:
             there = (
@@ -329,12 +335,13 @@ def _realization(ds: xr.Dataset, realization: int, point: dict[str, int] | None)
     """The one realization (of one sweep point) to render; a one-line error for an index out
     of range, a sweep without a chosen point, or a free bot."""
     validate(ds)
+    refuse_several_bots(ds, "render")
     check_point(ds, point or {})
     if not 0 <= realization < ds.sizes["realization"]:
         raise SoftcellError(
             f"realization index {realization} is not allowed: 0 .. {ds.sizes['realization'] - 1}"
         )
-    for dim in ds["bot_x"].dims[:-2]:
+    for dim in _swept(ds):
         if dim not in (point or {}):
             raise SoftcellError(
                 f"this is a sweep over {dim} ({ds.sizes[dim]} points): choose "
