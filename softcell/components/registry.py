@@ -56,6 +56,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "softcell.builtins.threshold",
     "softcell.builtins.repulsion",
     "softcell.builtins.bot_repulsion",
+    "softcell.builtins.alignment",
 )
 
 #: Kind name of each hook, in the order ``softcell plugins`` prints them.
