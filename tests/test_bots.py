@@ -260,13 +260,13 @@ def test_placed_bots_keep_the_gap_and_lie_inside_the_ring(placement):
 
 
 def test_the_lattice_packs_the_sites_of_an_analytic_count():
-    """Bots of 1 x 0.5 cm in a ring of 100 cm: the sites fill the disc of radius 99.5 cm at
-    the lattice's density within its rim (one row of sites lost around it)."""
+    """Bots of 1 x 0.5 cm in a ring of 40 cm: the sites fill the disc their centres can
+    reach, of radius 40 - gap - a, at the lattice's density, to 3 % (measured 1.4 %)."""
     gap = 0.1
-    sites = lattice_sites(100.0, 1.0, 0.5, gap)
+    sites = lattice_sites(40.0, 1.0, 0.5, gap)
     px = 2 + gap
     py = np.diff(np.unique(np.round(sites[:, 1], 9)))[0]
-    area = math.pi * (99.9 - 1.0) ** 2
+    area = math.pi * (40.0 - gap - 1.0) ** 2
     assert len(sites) == pytest.approx(area / (px * py), rel=0.03)
 
 
@@ -565,3 +565,76 @@ def test_the_analysis_of_several_bots_has_each_bot_and_the_cell_as_one_bot_sees_
         assert several[name].values == pytest.approx(values.mean())
         assert several[f"{name}_error"].values == pytest.approx(values.std(ddof=1) / np.sqrt(2))
         assert "across the 2 realizations" in several[f"{name}_error"].attrs["error"]
+
+
+# -- the study ---------------------------------------------------------------------------------
+
+
+def _point(count, shape="elongated", alignment=0.0, **values):
+    base = {"radius": 12.0, "shape": shape, "count": count, "alignment": alignment,
+            "per_area": count / (math.pi * 144), "uniform_boundary_fraction": 0.5}  # fmt: skip
+    for key in ("boundary_fraction", "asphericity", "polar_order", "velocity", "persistence",
+                "d_hat"):  # fmt: skip
+        value, error = values.get(key, (1.0, 0.1))
+        base[key], base[f"{key}_sem"] = value, error
+    return base
+
+
+def test_the_study_judges_each_trend_and_can_find_it_wrong():
+    """Synthetic points: each rule agrees, disagrees or is undecided by the 2-sigma rule."""
+    from softcell.studies.bots import trends
+
+    points = [
+        _point(1, velocity=(1.0, 0.05)),
+        _point(
+            4,
+            boundary_fraction=(0.9, 0.05),
+            asphericity=(0.02, 0.001),
+            velocity=(2.0, 0.05),
+            d_hat=(5.0, 0.1),
+        ),  # fmt: skip
+        _point(
+            16,
+            boundary_fraction=(0.55, 0.05),
+            asphericity=(0.05, 0.001),
+            velocity=(1.05, 0.05),
+            d_hat=(1.0, 0.1),
+        ),  # fmt: skip
+        _point(16, shape="round", d_hat=(2.0, 0.1)),
+        _point(16, alignment=500.0, velocity=(0.5, 0.05)),
+        {**_point(32), "does_not_fit": True},
+    ]
+    rules = {r["claim"].split(":")[0]: r for r in trends(points)}
+    gather = rules["bots gather at the membrane"]
+    # 0.9 +- 0.05 and two of 1.0 +- 0.1 against 0.5 agree; 0.55 +- 0.05 is undecided
+    assert (gather["agrees"], gather["undecided"]) == (3, 1)
+    rounder = rules["the ring is rounder with more bots"]
+    assert rounder["disagrees"] == 1  # 0.05 at K = 16 above 0.02 at K = 4
+    elongated = rules["elongated bots move the ring farther"]
+    assert elongated["disagrees"] == 1  # 1.0 against the round bots' 2.0
+    aligned = rules["aligned bots drive the ring faster"]
+    assert aligned["disagrees"] == 1
+    more = rules["more bots drive the ring faster"]
+    assert (more["agrees"], more["undecided"], more["disagrees"]) == (1, 1, 1)
+
+
+def test_a_bots_design_that_cannot_run_is_one_line(tmp_path, capsys):
+    out = tmp_path / "study"
+    assert main(["study", "bots", "--quick", "--counts", "2.5", "-o", str(out)]) == 2
+    assert "--counts 2.5 is not allowed" in capsys.readouterr().err
+    assert main(["study", "bots", "--quick", "--realizations", "1", "-o", str(out)]) == 2
+    assert "realizations = 1: must be >= 2" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_the_persistent_walk_fit_recovers_a_known_walk():
+    from softcell.studies.bots import persistent_walk
+
+    lag = np.geomspace(0.01, 25.0, 60)
+    v, tau = 1.3, 2.0
+    msd = 2 * v * v * tau * (lag - tau * (1 - np.exp(-lag / tau)))
+    fit = persistent_walk(lag, msd)
+    assert fit["velocity"] == pytest.approx(v, rel=1e-9)
+    assert fit["persistence"] == pytest.approx(tau, rel=1e-9)
+    assert fit["d_hat"] == pytest.approx(2 * v * v * tau, rel=1e-9)
+    assert math.isnan(persistent_walk(lag[:3], msd[:3])["velocity"])  # too few lags

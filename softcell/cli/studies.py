@@ -21,6 +21,7 @@ DESIGN_FLAGS: dict[str, tuple[str | None, str]] = {
     "gaps": ("G1,G2,...", "constriction: gap widths w / 2R, in (0, 1.5]; 1.5 is no partition"),
     "fractions": ("F1,F2,...", "crowding: area fractions, in (0, 0.785)"),
     "cells": ("N", "crowding: cells per box (a square number)"),
+    "counts": ("K1,K2,...", "bots: numbers of bots in one ring"),
     "strategies": (
         "P1,P2,...",
         "strategies: driving protocols (default: run_and_tumble, graspion, bump_and_turn, "
@@ -42,9 +43,18 @@ READ = {
     "radii": flags.distinct_numbers,
     "gaps": flags.distinct_numbers,
     "fractions": flags.distinct_numbers,
+    "counts": lambda name, raw: _whole(name, flags.distinct_numbers(name, raw)),
     "strategies": lambda name, raw: flags.distinct(name, flags.names(raw)),
     "only": lambda name, raw: flags.distinct(name, flags.names(raw)),
 }
+
+
+def _whole(name: str, values: list[float]) -> list[int]:
+    """``values`` as integers; a one-line error naming a value that is not one."""
+    for v in values:
+        if v != int(v):
+            raise SoftcellError(f"{name} {v:g} is not allowed: a number of bots is an integer")
+    return [int(v) for v in values]
 
 
 def _add_common(p: argparse.ArgumentParser) -> None:
@@ -68,7 +78,7 @@ def _add_study(p: argparse.ArgumentParser) -> None:
         "arena; constriction: how often one cell passes a gap in a wall, against the gap's "
         "width and R; crowding: the cells' D hat and <tau_g> against area fraction and R; "
         "strategies: D hat, <tau_g>, <tau_s> and shape index against R for each locomotion "
-        "strategy",
+        "strategy; bots: several bots in one ring against their number, shape and alignment",
     )
     design = p.add_argument_group("the design (each flag belongs to some studies)")
     for name, (metavar, help) in DESIGN_FLAGS.items():

@@ -23,10 +23,11 @@ WHERE = {
     "constriction": "softcell.studies.constriction",
     "crowding": "softcell.studies.crowding",
     "strategies": "softcell.studies.locomotion",
+    "bots": "softcell.studies.bots",
 }
 
 
 def studies() -> dict[str, Study]:
-    """Every study by name: ``sensitivity``, ``beyond``, ``constriction``, ``crowding`` and
-    ``strategies``."""
+    """Every study by name: ``sensitivity``, ``beyond``, ``constriction``, ``crowding``,
+    ``strategies`` and ``bots``."""
     return {name: importlib.import_module(module).STUDY for name, module in WHERE.items()}

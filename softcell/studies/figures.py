@@ -364,3 +364,65 @@ def strategies_figure(
     axes[3].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
     axes[0].legend(fontsize=7, loc="center left")
     _save(fig, path, dpi=110)
+
+
+def bots_figure(path: Path, points: Sequence[dict[str, Any]]) -> None:
+    """``softcell study bots``'s figure at ``path``: six quantities against the bots per
+    area (cm^-2, log scale), one line per shape and alignment, a marker per radius, with
+    standard errors across realizations; the even spread's boundary fraction dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(11.5, 6.6), constrained_layout=True)
+    panels = (
+        ("boundary_fraction", "fraction", "(a) bots within 2 a of the membrane"),
+        ("asphericity", "asphericity", "(b) membrane asphericity"),
+        ("polar_order", "|<e^(i theta)>|", "(c) polar order of the bots"),
+        ("velocity", "v (cm/s)", "(d) cell's speed v"),
+        ("persistence", "tau_p (s)", "(e) cell's persistence time"),
+        ("d_hat", "D hat (cm$^2$/s)", "(f) cell's D hat = 2 v$^2$ tau_p"),
+    )
+    ran = [p for p in points if not p.get("missing") and not p.get("does_not_fit")]
+    kinds = sorted({(p["shape"], p["alignment"] > 0) for p in ran if p["count"] > 1})
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    markers = "osD^v"
+    radii = sorted({p["radius"] for p in ran})
+    for i, (shape, aligned) in enumerate(kinds):
+        for j, radius in enumerate(radii):
+            line = [
+                p for p in ran
+                if p["shape"] == shape and p["radius"] == radius
+                and (p["count"] == 1 or (p["alignment"] > 0) == aligned)
+            ]  # fmt: skip
+            line.sort(key=lambda p: p["count"])
+            x = [p["per_area"] for p in line]
+            label = f"{shape}, {'aligned' if aligned else 'free'}" if j == 0 else None
+            for ax, (key, ylabel, title) in zip(axes.flat, panels, strict=True):
+                ax.errorbar(
+                    x, _values(line, key), yerr=_values(line, f"{key}_sem"),
+                    fmt=markers[j % len(markers)] + "-", color=colours[i % len(colours)],
+                    capsize=3, label=label, ms=5,
+                )  # fmt: skip
+                ax.set(xscale="log", xlabel="bots per area, K / pi R$^2$ (cm$^{-2}$)",
+                       ylabel=ylabel, title=title)  # fmt: skip
+            if i == 0:
+                even = [p["uniform_boundary_fraction"] for p in line]
+                axes.flat[0].plot(x, even, ls="--", color="0.5", lw=1,
+                                  label="even spread" if j == 0 else None)  # fmt: skip
+    if len(radii) > 1:
+        for j, radius in enumerate(radii):
+            axes.flat[1].plot([], [], markers[j % len(markers)], color="0.3",
+                              label=f"R = {radius:g} cm")  # fmt: skip
+        axes.flat[1].legend(fontsize=8)
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    ticks = sorted({round(p["per_area"], 4) for p in ran})
+    for ax in axes.flat:
+        ax.set_ylim(bottom=0)
+        ax.set_xticks(ticks)
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    axes.flat[0].legend(fontsize=8)
+    _save(fig, path, dpi=110)
