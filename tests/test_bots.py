@@ -638,3 +638,24 @@ def test_the_persistent_walk_fit_recovers_a_known_walk():
     assert fit["persistence"] == pytest.approx(tau, rel=1e-9)
     assert fit["d_hat"] == pytest.approx(2 * v * v * tau, rel=1e-9)
     assert math.isnan(persistent_walk(lag[:3], msd[:3])["velocity"])  # too few lags
+
+
+def test_the_bots_repel_exactly_within_the_cut_off():
+    """Over random placements: forces where the gap is within the cut-off (1.25 cm), none
+    beyond it (the kernel's quick separation test never drops a pair that touches)."""
+    rng = np.random.default_rng(5)
+    cutoff = COEFFICIENTS[2]
+    seen = {True: 0, False: 0}
+    for _ in range(400):
+        pa = np.array([0.0, 0.0, rng.uniform(-np.pi, np.pi)])
+        angle, d = rng.uniform(0, 2 * np.pi), rng.uniform(2 * B, 2 * A + cutoff + 0.5)
+        pb = np.array([d * math.cos(angle), d * math.sin(angle), rng.uniform(-np.pi, np.pi)])
+        gap = ellipse_gap(pa, pb, A, B)
+        if abs(gap - cutoff) < 1e-6:
+            continue
+        out = np.zeros(6)
+        bot_repulsion_kernel(pa, pb, CONTEXT, COEFFICIENTS, out)
+        within = gap <= cutoff
+        assert bool(np.any(out != 0)) == within, (gap, out)
+        seen[within] += 1
+    assert min(seen.values()) > 50

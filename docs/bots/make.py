@@ -1,11 +1,12 @@
 """The figure, numbers and movie of docs/bots.md's study of several bots in one ring.
 
-    python docs/bots/make.py -o docs/bots [--runs DIR]
+    python docs/bots/make.py -o docs/bots [--runs DIR] [--overwrite]
 
 Runs ``softcell study bots --quick`` (root seed 0, every core) into DIR (default a temporary
-folder; a finished study there is kept), copies its ``bots.png`` and ``bots.json`` into the
-output folder, and animates the first 20 s of realization 0 of 16 aligned elongated bots (at
-real time, 20 frames/s, 1 s trails) as an H.264 MP4 in the ``_static/gallery`` folder beside the output
+folder; a finished study there is kept, unless made with other code: then ``--overwrite``
+recomputes it), copies its ``bots.png`` and ``bots.json`` into the output folder, and
+animates the first 20 s of realization 0 of 16 aligned elongated bots (at real time, 20
+frames/s, 1 s trails) as an H.264 MP4 in the ``_static/gallery`` folder beside the output
 folder, with its last frame as ``bots_frame.png``.
 """
 
@@ -29,9 +30,12 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output", type=Path, required=True)
     parser.add_argument("--runs", type=Path, help="where the study goes (kept)")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="recompute runs in DIR made with other code"
+    )
     args = parser.parse_args(argv)
     runs = args.runs or Path(tempfile.mkdtemp(prefix="softcell-bots-"))
-    bots(runs, design=QUICK, seed=SEED)
+    bots(runs, design=QUICK, seed=SEED, overwrite=args.overwrite)
     args.output.mkdir(parents=True, exist_ok=True)
     for name in ("bots.png", "bots.json"):
         shutil.copyfile(runs / name, args.output / name)

@@ -50,16 +50,33 @@ def _add_forces(pose_a, pose_b, phi_a, phi_b, a, b, coefficients, out):
 
 
 @njit(**LEAN_JIT)
-def _far(pose_a, pose_b, reach):
+def _far(pose_a, pose_b, a, b, coefficients):
+    """Whether the bots are surely beyond the cut-off: centres farther apart than the reach,
+    or the ellipses separated along the line of their centres by more than the cut-off (each
+    one's extent along a unit n is sqrt(a^2 (n.u)^2 + b^2 (n.v)^2), u, v its axes; the
+    separation along any line bounds the gap of separated ellipses from below)."""
     dx, dy = pose_b[0] - pose_a[0], pose_b[1] - pose_a[1]
-    return dx * dx + dy * dy > reach * reach
+    d2 = dx * dx + dy * dy
+    reach = coefficients[3]
+    if d2 > reach * reach:
+        return True
+    d = math.sqrt(d2)
+    if d == 0.0:
+        return False
+    nx, ny = dx / d, dy / d
+    extent = 0.0
+    for heading in (pose_a[2], pose_b[2]):
+        along = nx * math.cos(heading) + ny * math.sin(heading)
+        across = -nx * math.sin(heading) + ny * math.cos(heading)
+        extent += math.sqrt(a * a * along * along + b * b * across * across)
+    return d - extent > coefficients[2]
 
 
 @njit(**LEAN_JIT)
 def bot_repulsion_kernel(pose_a, pose_b, context, coefficients, out):
     """coefficients = [F_c (N), lambda_b (cm), cut-off (cm), reach (cm)]; context[1:3] = a, b."""
     a, b = context[1], context[2]
-    if _far(pose_a, pose_b, coefficients[3]):
+    if _far(pose_a, pose_b, a, b, coefficients):
         return
     phi_a = coarse_deepest(pose_a, pose_b, a, b)
     phi_b = coarse_deepest(pose_b, pose_a, a, b)
@@ -72,7 +89,7 @@ def bot_repulsion_jacobian(pose_a, pose_b, context, coefficients, steps, scratch
     deepest points found by Newton's method from the unperturbed ones (the same minimum
     as the kernel's search finds, without the search)."""
     a, b = context[1], context[2]
-    if _far(pose_a, pose_b, coefficients[3]):
+    if _far(pose_a, pose_b, a, b, coefficients):
         return
     phi_a = refine_deepest(coarse_deepest(pose_a, pose_b, a, b), pose_a, pose_b, a, b)[5]
     phi_b = refine_deepest(coarse_deepest(pose_b, pose_a, a, b), pose_b, pose_a, a, b)[5]

@@ -221,9 +221,14 @@ def _component_specs(components: dict[str, Any] | None) -> dict[str, tuple[Param
 
 
 def _shown_components(components: dict[str, Any]) -> str:
-    return "; ".join(
-        f"{kind} {', '.join(v) if isinstance(v, list) else v}" for kind, v in components.items()
-    )
+    def shown(kind: str, v: Any) -> str:
+        if isinstance(v, dict):  # the settings of an assembly or of several bots
+            v = ", ".join(f"{k} {', '.join(map(str, x)) if isinstance(x, list) else x}"
+                          for k, x in v.items())  # fmt: skip
+            return f"{kind} ({v})"
+        return f"{kind} {', '.join(v) if isinstance(v, list) else v}"
+
+    return "; ".join(shown(kind, v) for kind, v in components.items())
 
 
 def _add_cache(p: argparse.ArgumentParser) -> None:

@@ -143,11 +143,7 @@ def run_realization(
         last finished chunk; its message says where the run stopped.
     """
     times, membrane, fine = sampling_plan(model.params)
-    if start is None:
-        modes, pose, schedule = initial_state(model, rng)
-        state = stepper.start(modes, pose, schedule)
-    else:
-        state, schedule = start
+    state, schedule = _started(model, stepper, rng, start)
     grid = SampleGrid(
         times,
         membrane,
@@ -206,6 +202,15 @@ def run_realization(
         if starts is None
         else state["event_times"][: int(state["event_count"][0])].copy(),
     )
+
+
+def _started(model: Model, stepper: Stepper, rng: np.random.Generator | None, start):
+    """``start`` (several bots), or the stepper's starting state and the schedule of one bot,
+    drawn from ``rng``."""
+    if start is not None:
+        return start
+    modes, pose, schedule = initial_state(model, rng)
+    return stepper.start(modes, pose, schedule), schedule
 
 
 def _phases(

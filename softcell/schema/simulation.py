@@ -263,6 +263,16 @@ def _fine_problems(ds: xr.Dataset) -> list[str]:
     return found
 
 
+def _expected_dims(ds: xr.Dataset, spec: VariableSpec) -> tuple[str, ...]:
+    """The dims ``spec``'s variable must end with in ``ds``: ``cell`` after the time dim in
+    an assembly's file, ``bot`` after it for the bot's variables of several bots."""
+    per_cell = spec.name in VARIABLES or spec.name in FINE_VARIABLES
+    expected = with_cell(spec.dims) if per_cell and "cell" in ds.dims else spec.dims
+    if per_cell and "bot" in ds.dims and spec.name.startswith("bot_"):
+        expected = with_bot(expected)
+    return expected
+
+
 def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
     if spec.name not in ds.variables:
         return [f"{spec.name}: missing"]
@@ -270,10 +280,7 @@ def _variable_problems(ds: xr.Dataset, spec: VariableSpec) -> list[str]:
     found = []
     # Sweeps add leading dims (one per swept parameter); the schema's dims must come last
     # (with ``cell`` after the time dim in an assembly's file).
-    per_cell = spec.name in VARIABLES or spec.name in FINE_VARIABLES
-    expected = with_cell(spec.dims) if per_cell and "cell" in ds.dims else spec.dims
-    if per_cell and "bot" in ds.dims and spec.name.startswith("bot_"):
-        expected = with_bot(expected)
+    expected = _expected_dims(ds, spec)
     if var.dims[len(var.dims) - len(expected) :] != expected:
         found.append(f"{spec.name}: dims {var.dims}, expected (..., {', '.join(expected)})")
     if var.dtype.kind not in (spec.kind, "u" if spec.kind == "i" else spec.kind):

@@ -89,18 +89,7 @@ class BotsDesign:
         """Refuse, in one line naming the value, a grid that cannot be run."""
         if not (self.radii and self.counts and self.shapes and self.alignments):
             raise SoftcellError(f"bots design {self.name!r}: an empty list")
-        for r in self.radii:
-            if not (math.isfinite(r) and r > 0):
-                raise SoftcellError(f"bots radius {r!r} cm: must be > 0")
-        for k in self.counts:
-            if not (isinstance(k, int) and 1 <= k <= 200):
-                raise SoftcellError(f"bots count {k!r}: must be an integer from 1 to 200")
-        for s in self.shapes:
-            if s not in SHAPES:
-                raise SoftcellError(f"bots shape {s!r}: must be one of {', '.join(SHAPES)}")
-        for j in self.alignments:
-            if not (math.isfinite(j) and j >= 0):
-                raise SoftcellError(f"bots alignment {j!r} N cm: must be >= 0")
+        _check_values(self)
         if self.realizations < 2:
             raise SoftcellError(f"bots realizations = {self.realizations}: must be >= 2")
         if not (math.isfinite(self.duration) and self.duration > DISCARD + 20):
@@ -108,6 +97,22 @@ class BotsDesign:
                 f"bots duration = {self.duration!r} s: must exceed the discard of "
                 f"{DISCARD:g} s by at least 20 s"
             )
+
+
+def _check_values(design: BotsDesign) -> None:
+    """Refuse a radius, count, shape or aligning torque out of range, naming it."""
+    for r in design.radii:
+        if not (math.isfinite(r) and r > 0):
+            raise SoftcellError(f"bots radius {r!r} cm: must be > 0")
+    for k in design.counts:
+        if not (isinstance(k, int) and 1 <= k <= 200):
+            raise SoftcellError(f"bots count {k!r}: must be an integer from 1 to 200")
+    for s in design.shapes:
+        if s not in SHAPES:
+            raise SoftcellError(f"bots shape {s!r}: must be one of {', '.join(SHAPES)}")
+    for j in design.alignments:
+        if not (math.isfinite(j) and j >= 0):
+            raise SoftcellError(f"bots alignment {j!r} N cm: must be >= 0")
 
 
 #: The full grid (not yet run: its cost is estimated in docs/results/bots).
@@ -296,56 +301,57 @@ def trends(points: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Each published trend, judged at every pair of points it compares (see the module's
     docstring): the comparisons and how many agree, disagree or are undecided."""
     ran = [p for p in points if not p.get("missing") and not p.get("does_not_fit")]
+    return [
+        _rule("bots gather at the membrane: boundary fraction above an even spread's",
+              "Paoluzzi et al. 2016; Deblais et al. 2018", _gathering(ran)),
+        _rule("the ring is rounder with more bots: asphericity falls with K",
+              "Paoluzzi et al. 2016", _rounding(ran)),
+        _rule("elongated bots move the ring farther: D hat above round bots'",
+              "Paoluzzi et al. 2016",
+              _against(ran, "d_hat", lambda p: p["shape"] == "elongated" and p["count"] >= 2,
+                       {"shape": "round"})),
+        _rule("aligned bots drive the ring faster: v above the free bots'",
+              "Uplap et al. 2023; Quillen et al. 2020",
+              _against(ran, "velocity", lambda p: p["alignment"] > 0, {"alignment": 0.0})),
+        _rule("more bots drive the ring faster: v above one bot's", "Deblais et al. 2018",
+              _against(ran, "velocity", lambda p: p["count"] >= 2,
+                       {"count": 1, "alignment": 0.0})),
+    ]  # fmt: skip
 
-    def find(**keys):
-        return next((p for p in ran if all(p[k] == v for k, v in keys.items())), None)
 
-    rules = []
+def _gathering(ran: list[dict]) -> list:
+    """Each point of two or more bots against an even spread of them."""
+    return [
+        (p, p["boundary_fraction"] - p["uniform_boundary_fraction"], p["boundary_fraction_sem"], 1)
+        for p in ran
+        if p["count"] >= 2
+    ]
+
+
+def _rounding(ran: list[dict]) -> list:
+    """Each point against every point of more bots, the rest alike: asphericity falls."""
     checks = []
-    for p in ran:  # accumulation at the boundary (Paoluzzi 2016; Deblais 2018)
-        if p["count"] >= 2:
-            diff = p["boundary_fraction"] - p["uniform_boundary_fraction"]
-            checks.append((p, diff, p["boundary_fraction_sem"], 1))
-    rules.append(_rule("bots gather at the membrane: boundary fraction above an even spread's",
-                       "Paoluzzi et al. 2016; Deblais et al. 2018", checks))  # fmt: skip
+    for p in ran:
+        for q in ran:
+            if _same(q, p, "radius", "shape", "alignment") and q["count"] > p["count"] >= 2:
+                diff, error = _compare(p, q, "asphericity")
+                checks.append((q, diff, error, -1))
+    return checks
+
+
+def _against(ran: list[dict], key: str, chosen, other: dict) -> list:
+    """Each chosen point against the point that differs from it by ``other``: ``key``
+    higher (the chosen minus the other, sign +1)."""
     checks = []
-    for p in ran:  # rounder with more bots (Paoluzzi 2016)
-        more = [q for q in ran if _same(q, p, "radius", "shape", "alignment")
-                and q["count"] > p["count"] >= 2]  # fmt: skip
-        for q in more:
-            diff, error = _compare(p, q, "asphericity")
-            checks.append((q, diff, error, -1))
-    rules.append(_rule("the ring is rounder with more bots: asphericity falls with K",
-                       "Paoluzzi et al. 2016", checks))  # fmt: skip
-    checks = []
-    for p in ran:  # elongated bots move the ring faster (Paoluzzi 2016)
-        if p["shape"] == "elongated" and p["count"] >= 2:
-            q = find(radius=p["radius"], shape="round", count=p["count"],
-                     alignment=p["alignment"])  # fmt: skip
-            if q is not None:
-                diff, error = _compare(q, p, "d_hat")
-                checks.append((p, diff, error, 1))
-    rules.append(_rule("elongated bots move the ring farther: D hat above round bots'",
-                       "Paoluzzi et al. 2016", checks))  # fmt: skip
-    checks = []
-    for p in ran:  # alignment raises the ring's motility (Uplap 2023; Quillen 2020)
-        if p["alignment"] > 0:
-            q = find(radius=p["radius"], shape=p["shape"], count=p["count"], alignment=0.0)
-            if q is not None:
-                diff, error = _compare(q, p, "velocity")
-                checks.append((p, diff, error, 1))
-    rules.append(_rule("aligned bots drive the ring faster: v above the free bots'",
-                       "Uplap et al. 2023; Quillen et al. 2020", checks))  # fmt: skip
-    checks = []
-    for p in ran:  # more bots drive the corral faster (Deblais 2018)
-        if p["count"] >= 2:
-            q = find(radius=p["radius"], shape=p["shape"], count=1, alignment=0.0)
-            if q is not None:
-                diff, error = _compare(q, p, "velocity")
-                checks.append((p, diff, error, 1))
-    rules.append(_rule("more bots drive the ring faster: v above one bot's",
-                       "Deblais et al. 2018", checks))  # fmt: skip
-    return rules
+    for p in ran:
+        if not chosen(p):
+            continue
+        wanted = {k: p[k] for k in ("radius", "shape", "count", "alignment")} | other
+        q = next((q for q in ran if all(q[k] == v for k, v in wanted.items())), None)
+        if q is not None:
+            diff, error = _compare(q, p, key)
+            checks.append((p, diff, error, 1))
+    return checks
 
 
 def _same(p: dict, q: dict, *keys: str) -> bool:

@@ -366,6 +366,17 @@ def strategies_figure(
     _save(fig, path, dpi=110)
 
 
+#: The panels of the bots study's figure: quantity, axis label, title.
+BOTS_PANELS = (
+    ("boundary_fraction", "fraction", "(a) bots within 2 a of the membrane"),
+    ("asphericity", "asphericity", "(b) membrane asphericity"),
+    ("polar_order", "|<e^(i theta)>|", "(c) polar order of the bots"),
+    ("velocity", "v (cm/s)", "(d) cell's speed v"),
+    ("persistence", "tau_p (s)", "(e) cell's persistence time"),
+    ("d_hat", "D hat (cm$^2$/s)", "(f) cell's D hat = 2 v$^2$ tau_p"),
+)
+
+
 def bots_figure(path: Path, points: Sequence[dict[str, Any]]) -> None:
     """``softcell study bots``'s figure at ``path``: six quantities against the bots per
     area (cm^-2, log scale), one line per shape and alignment, a marker per radius, with
@@ -376,53 +387,53 @@ def bots_figure(path: Path, points: Sequence[dict[str, Any]]) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 3, figsize=(11.5, 6.6), constrained_layout=True)
-    panels = (
-        ("boundary_fraction", "fraction", "(a) bots within 2 a of the membrane"),
-        ("asphericity", "asphericity", "(b) membrane asphericity"),
-        ("polar_order", "|<e^(i theta)>|", "(c) polar order of the bots"),
-        ("velocity", "v (cm/s)", "(d) cell's speed v"),
-        ("persistence", "tau_p (s)", "(e) cell's persistence time"),
-        ("d_hat", "D hat (cm$^2$/s)", "(f) cell's D hat = 2 v$^2$ tau_p"),
-    )
     ran = [p for p in points if not p.get("missing") and not p.get("does_not_fit")]
     kinds = sorted({(p["shape"], p["alignment"] > 0) for p in ran if p["count"] > 1})
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    markers = "osD^v"
     radii = sorted({p["radius"] for p in ran})
-    for i, (shape, aligned) in enumerate(kinds):
+    for i, kind in enumerate(kinds):
         for j, radius in enumerate(radii):
-            line = [
-                p for p in ran
-                if p["shape"] == shape and p["radius"] == radius
-                and (p["count"] == 1 or (p["alignment"] > 0) == aligned)
-            ]  # fmt: skip
-            line.sort(key=lambda p: p["count"])
-            x = [p["per_area"] for p in line]
-            label = f"{shape}, {'aligned' if aligned else 'free'}" if j == 0 else None
-            for ax, (key, ylabel, title) in zip(axes.flat, panels, strict=True):
-                ax.errorbar(
-                    x, _values(line, key), yerr=_values(line, f"{key}_sem"),
-                    fmt=markers[j % len(markers)] + "-", color=colours[i % len(colours)],
-                    capsize=3, label=label, ms=5,
-                )  # fmt: skip
-                ax.set(xscale="log", xlabel="bots per area, K / pi R$^2$ (cm$^{-2}$)",
-                       ylabel=ylabel, title=title)  # fmt: skip
-            if i == 0:
-                even = [p["uniform_boundary_fraction"] for p in line]
-                axes.flat[0].plot(x, even, ls="--", color="0.5", lw=1,
-                                  label="even spread" if j == 0 else None)  # fmt: skip
+            _bots_line(axes, ran, kind, radius, colours[i % len(colours)], _MARKERS[j % 5],
+                       first=(i == 0, j == 0))  # fmt: skip
     if len(radii) > 1:
         for j, radius in enumerate(radii):
-            axes.flat[1].plot([], [], markers[j % len(markers)], color="0.3",
-                              label=f"R = {radius:g} cm")  # fmt: skip
+            axes.flat[1].plot([], [], _MARKERS[j % 5], color="0.3", label=f"R = {radius:g} cm")
         axes.flat[1].legend(fontsize=8)
+    _bots_axes(axes, sorted({round(p["per_area"], 4) for p in ran}))
+    _save(fig, path, dpi=110)
+
+
+_MARKERS = "osD^v"
+
+
+def _bots_line(axes, ran, kind, radius, colour, marker, first) -> None:
+    """One shape and alignment at one radius, in every panel (one bot at its start)."""
+    shape, aligned = kind
+    line = sorted(
+        (p for p in ran
+         if p["shape"] == shape and p["radius"] == radius
+         and (p["count"] == 1 or (p["alignment"] > 0) == aligned)),
+        key=lambda p: p["count"],
+    )  # fmt: skip
+    x = [p["per_area"] for p in line]
+    label = f"{shape}, {'aligned' if aligned else 'free'}" if first[1] else None
+    for ax, (key, ylabel, title) in zip(axes.flat, BOTS_PANELS, strict=True):
+        ax.errorbar(x, _values(line, key), yerr=_values(line, f"{key}_sem"), fmt=marker + "-",
+                    color=colour, capsize=3, label=label, ms=5)  # fmt: skip
+        ax.set(xscale="log", xlabel="bots per area, K / pi R$^2$ (cm$^{-2}$)", ylabel=ylabel,
+               title=title)  # fmt: skip
+    if first[0]:
+        axes.flat[0].plot(x, [p["uniform_boundary_fraction"] for p in line], ls="--",
+                          color="0.5", lw=1, label="even spread" if first[1] else None)  # fmt: skip
+
+
+def _bots_axes(axes, ticks) -> None:
+    """Plain tick labels at the points' bots per area; every quantity from zero."""
     from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-    ticks = sorted({round(p["per_area"], 4) for p in ran})
     for ax in axes.flat:
         ax.set_ylim(bottom=0)
         ax.set_xticks(ticks)
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.xaxis.set_minor_formatter(NullFormatter())
     axes.flat[0].legend(fontsize=8)
-    _save(fig, path, dpi=110)
