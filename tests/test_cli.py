@@ -24,6 +24,7 @@ def test_plugins_lists_every_kind(capsys):
         "integrator",
         "stopgo_detector",
         "pair_term",
+        "bot_interaction",
     )
     assert sorted(KINDS.values()) == sorted(kinds)
     for kind in kinds:

@@ -39,7 +39,9 @@ def test_builtins_register_through_the_hooks():
         "integrator",
         "stopgo_detector",
         "pair_term",
+        "bot_interaction",
     }
+    assert registry.names("bot_interaction") == ["alignment", "bot_repulsion"]
     assert registry.names("friction_law") == ["coulomb", "viscous"]
     assert "arena" in registry.names("energy_term")
     entry = registry.entries("stopgo_detector")[0]

@@ -14,7 +14,14 @@ from softcell.studies.variants import VariantDesign
 
 def test_every_study_is_found_by_its_name_and_follows_the_protocol():
     found = studies()
-    assert list(found) == ["sensitivity", "beyond", "constriction", "crowding", "strategies"]
+    assert list(found) == [
+        "sensitivity",
+        "beyond",
+        "constriction",
+        "crowding",
+        "strategies",
+        "bots",
+    ]
     for name, study in found.items():
         assert isinstance(study, Study) and study.name == name
         assert isinstance(study, VariantStudy) == (name in ("sensitivity", "beyond"))

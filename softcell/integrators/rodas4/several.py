@@ -27,7 +27,7 @@ from softcell.engine.compose import (
 )
 from softcell.engine.kernels.linalg import lu_workspace
 from softcell.errors import ParameterError
-from softcell.integrators.rodas4 import (
+from softcell.integrators.rodas4.method import (
     ERR_ACCEPTED,
     H_NEXT,
     JACOBIANS,
@@ -43,10 +43,8 @@ from softcell.integrators.rodas4 import (
     LoopState,
     Problem,
     T,
-    compiled_loop,
-    group_coefficients,
-    workspace,
 )
+from softcell.integrators.rodas4.single import compiled_loop, group_coefficients, workspace
 
 
 class BotsProblem(NamedTuple):
