@@ -87,6 +87,17 @@ class Bots:
     def from_mapping(cls, data: dict[str, object], source: object = "[bots]") -> Bots:
         """The settings of a ``[bots]`` table or of the flags.
 
+        Parameters
+        ----------
+        data : dict
+            Keys of ``BOTS_KEYS`` (``gap`` in cm, ``interactions`` a list of names).
+        source : object
+            What the values came from, for errors (``"[bots]"``, a file name).
+
+        Returns
+        -------
+        Bots
+
         Raises
         ------
         ConfigError
@@ -181,10 +192,16 @@ def place_bots(
     """The bots' starting poses (float64[K, 3]: x, y in cm, heading in rad) inside the ring's
     starting circle of radius ``radius`` (cm, centred on the origin), each ``bots.gap`` clear
     of the circle and of the others (the bots' gap of
-    :func:`~softcell.engine.kernels.ellipse.ellipse_gap`).
+    ``softcell.engine.kernels.ellipse.ellipse_gap``).
 
     Parameters
     ----------
+    bots : Bots
+        How many, placed how, with what gap (cm).
+    radius : float
+        The ring's starting radius (cm).
+    a, b : float
+        The bots' semi-axes (cm).
     headings : float64[K]
         The headings each bot's protocol drew (rad).
     rng : Generator

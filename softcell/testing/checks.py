@@ -684,8 +684,11 @@ def check_bot_interaction(
         origin (Newton's third law; False for an interaction meant to break it).
     rtol : float
         Allowed departure of the momentum sums, relative to the largest generalized force
-        of the placement; a ``jacobian_kernel`` (if it has one) may depart from central
-        differences of the kernel by 1000 rtol of the largest entry over the placements.
+        of the placement (dimensionless); a ``jacobian_kernel`` (if it has one) may depart
+        from central differences of the kernel by 1000 rtol of the largest entry over the
+        placements.
+    seed : int
+        The seed of the placements' random stream.
 
     Raises
     ------
