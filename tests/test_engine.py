@@ -331,3 +331,19 @@ def test_kill_9_then_the_same_command_resumes_to_the_same_bytes(tmp_path):
     name = "point000_realization0000.nc"
     assert (out / name).read_bytes() == (tmp_path / "whole" / name).read_bytes()
     assert not list(out.glob(".*"))
+
+
+def test_the_membrane_resampled_is_the_same_whatever_the_blas_threads():
+    """A file must hold the same bytes whether a worker (one BLAS thread) or the command
+    (as many as the cores) wrote it: the membrane's points are evaluated on one thread."""
+    from threadpoolctl import threadpool_limits
+
+    from softcell.engine.kernels.spectral import resample
+
+    rng = np.random.default_rng(0)
+    modes = rng.normal(size=(3001, 33)) + 1j * rng.normal(size=(3001, 33))
+    with threadpool_limits(limits=1, user_api="blas"):
+        one = resample(modes, 64)
+    with threadpool_limits(limits=2, user_api="blas"):
+        two = resample(modes, 64)
+    assert one.tobytes() == two.tobytes()

@@ -125,6 +125,16 @@ FULL = BotsDesign(
     realizations=3,
     duration=120.0,
 )
+#: Every radius and up to 32 elongated bots, two realizations of 60 s (docs/bots.md).
+MEDIUM = BotsDesign(
+    name="medium",
+    radii=(8.0, 12.0, 20.0),
+    counts=(1, 4, 16, 32),
+    shapes=("elongated",),
+    alignments=(0.0, ALIGNMENT),
+    realizations=2,
+    duration=60.0,
+)
 #: A look: one ring of 12 cm, 1, 4 and 16 bots.
 QUICK = BotsDesign(
     name="quick",

@@ -95,11 +95,17 @@ def resample(modes: np.ndarray, points: int) -> np.ndarray:
     """The curve at ``points`` equally spaced xi, exactly (float64 [..., points] x and y).
 
     ``modes``: complex128[..., 2 Lc + 1]. Exact for any number of points: it evaluates the
-    trigonometric polynomial, it does not interpolate.
+    trigonometric polynomial, it does not interpolate. The same bytes whatever the number of
+    BLAS threads of the process.
     """
+    from threadpoolctl import threadpool_limits
+
     modes = np.asarray(modes)
     lc = (modes.shape[-1] - 1) // 2
     k = np.arange(-lc, lc + 1)
     xi = 2.0 * np.pi * np.arange(points) / points
-    z = modes @ np.exp(1j * np.outer(k, xi))
+    # One BLAS thread: the product's rounding depends on how many threads share it, and a
+    # file must hold the same bytes whether a worker (one thread) or the command wrote it.
+    with threadpool_limits(limits=1, user_api="blas"):
+        z = modes @ np.exp(1j * np.outer(k, xi))
     return np.stack([z.real, z.imag])
