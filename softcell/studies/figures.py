@@ -399,7 +399,11 @@ def bots_figure(path: Path, points: Sequence[dict[str, Any]]) -> None:
         for j, radius in enumerate(radii):
             axes.flat[1].plot([], [], _MARKERS[j % 5], color="0.3", label=f"R = {radius:g} cm")
         axes.flat[1].legend(fontsize=8)
-    _bots_axes(axes, sorted({round(p["per_area"], 4) for p in ran}))
+    ticks: list[float] = []
+    for value in sorted({round(p["per_area"], 4) for p in ran}):
+        if not ticks or value >= 2.5 * ticks[-1]:  # labels that do not run into each other
+            ticks.append(value)
+    _bots_axes(axes, ticks)
     _save(fig, path, dpi=110)
 
 
