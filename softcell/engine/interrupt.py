@@ -12,7 +12,10 @@ files removed, a checkpoint saved, the folder's lock released) is only recorded,
 signal cannot break the cleanup; a third one ends the process at once (its lock goes with it;
 the next run removes what it left). A simulation
 also polls :func:`received` between chunks of samples: Python only prints a
-``KeyboardInterrupt`` raised inside a finaliser, and the run must stop all the same.
+``KeyboardInterrupt`` raised inside a finaliser (a progress bar's ``__del__``, an import
+lock's callback), and the run must stop all the same; within :func:`stop_signals` that
+print is left out (the stop is recorded, and said in one line), other unraisable errors are
+printed as before.
 """
 
 from __future__ import annotations
@@ -31,12 +34,21 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 FORCE_AT = 3
 
 _received: list[int] = []
-_state = {"pending": False, "deferring": 0}
+_state: dict = {"pending": False, "deferring": 0, "hook": sys.unraisablehook}
 
 
 def received() -> int | None:
     """The number of the stop signal received within :func:`stop_signals`, or None."""
     return _received[-1] if _received else None
+
+
+def _quiet_stop(unraisable) -> None:
+    """``sys.unraisablehook`` within :func:`stop_signals`: a ``KeyboardInterrupt`` that our
+    handler raised inside a finaliser is not printed (the stop is recorded; the run stops at
+    its next check); anything else goes to the hook that was there."""
+    if issubclass(unraisable.exc_type, KeyboardInterrupt) and _received:
+        return
+    _state["hook"](unraisable)
 
 
 def _handler(signum: int, frame: object) -> None:
@@ -102,12 +114,14 @@ def stop_signals() -> Iterator[None]:
         return
     previous = {number: signal.signal(number, _handler) for number in STOP_SIGNALS}
     _received.clear()
-    _state.update(pending=False, deferring=0)
+    _state.update(pending=False, deferring=0, hook=sys.unraisablehook)
+    sys.unraisablehook = _quiet_stop
     try:
         yield
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+        sys.unraisablehook = _state["hook"]
         _received.clear()
         _state.update(pending=False, deferring=0)
 
