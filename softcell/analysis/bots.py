@@ -54,39 +54,6 @@ COLLECTIVE = {
 }
 
 
-def bots_as_realizations(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` with its bots taken as realizations (index r K + b): the ring's variables are
-    repeated for each bot, the bots' starting poses dropped."""
-    body = ds.drop_vars([n for n in BOT_START_VARIABLES if n in ds.variables])
-    k = ds.sizes["bot"]
-    stacked = body.stack(member=("realization", "bot"), create_index=False)
-    stacked = stacked.drop_vars(["realization", "bot"], errors="ignore")
-    stacked = stacked.rename(member="realization").transpose("realization", ...)
-    index = np.arange(ds.sizes["realization"] * k, dtype=np.int64)
-    return stacked.assign_coords(realization=("realization", index, ds["realization"].attrs))
-
-
-def bots_back(analysis: xr.Dataset, ds: xr.Dataset) -> xr.Dataset:
-    """The analysis of :func:`bots_as_realizations`'s Dataset with its realization dim
-    split back into (realization, bot)."""
-    shape = (ds.sizes["realization"], ds.sizes["bot"])
-    rest = analysis.drop_vars("realization")
-    split = {}
-    for name in list(rest.data_vars):
-        da = rest[name]
-        if "realization" not in da.dims:
-            continue
-        axis = da.dims.index("realization")
-        dims = (*da.dims[:axis], "realization", "bot", *da.dims[axis + 1 :])
-        values = np.asarray(da.values)
-        values = values.reshape(values.shape[:axis] + shape + values.shape[axis + 1 :])
-        split[name] = (dims, values, da.attrs)
-    out = rest.drop_vars(list(split)).assign_coords(
-        {name: (name, ds[name].values, dict(ds[name].attrs)) for name in ("realization", "bot")}
-    )
-    return out.assign(split)[list(analysis.data_vars)]
-
-
 def analyze_bots(
     ds: xr.Dataset,
     options: Mapping[str, Any] | None,
@@ -98,14 +65,19 @@ def analyze_bots(
     """The analysis of several bots in one ring (see the module's docstring); ``analyze`` is
     the single-bot analysis (:func:`softcell.analysis.sweep.analyze`, which hands itself
     over)."""
+    from softcell.analysis.collective import members_as_realizations, members_back
     from softcell.analysis.options import analysis_options
 
     k = ds.sizes["bot"]
     blocks = np.repeat(np.arange(ds.sizes["realization"]), k)
     per_bot = analyze(
-        bots_as_realizations(ds), options, progress=progress, registry=registry, blocks=blocks
+        members_as_realizations(ds, "bot", BOT_START_VARIABLES),
+        options,
+        progress=progress,
+        registry=registry,
+        blocks=blocks,
     )
-    out = bots_back(per_bot, ds)
+    out = members_back(per_bot, ds, "bot")
     discard = float(analysis_options(dict(options or {}))["discard"])
     lead = [d for d in ds["cell_x"].dims if d not in ("realization", "time")]
     a = float(json_parameter(ds, "bot_semi_major"))

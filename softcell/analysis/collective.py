@@ -146,19 +146,32 @@ def cells_as_realizations(ds: xr.Dataset) -> xr.Dataset:
     domain variables dropped)."""
     from softcell.schema import DOMAIN_VARIABLES
 
-    body = ds.drop_vars([n for n in DOMAIN_VARIABLES if n in ds.variables])
-    cells = ds.sizes["cell"]
-    stacked = body.stack(member=("realization", "cell"), create_index=False)
-    stacked = stacked.drop_vars(["realization", "cell"], errors="ignore")
+    return members_as_realizations(ds, "cell", DOMAIN_VARIABLES)
+
+
+def members_as_realizations(ds: xr.Dataset, dim: str, dropped) -> xr.Dataset:
+    """``ds`` with the members along ``dim`` (an assembly's cells, a ring's bots) taken as
+    realizations, index r * members + c; the variables named in ``dropped`` left out, the
+    others repeated for each member where they lack ``dim``."""
+    body = ds.drop_vars([n for n in dropped if n in ds.variables])
+    members = ds.sizes[dim]
+    stacked = body.stack(member=("realization", dim), create_index=False)
+    stacked = stacked.drop_vars(["realization", dim], errors="ignore")
     stacked = stacked.rename(member="realization").transpose("realization", ...)
-    index = np.arange(ds.sizes["realization"] * cells, dtype=np.int64)
+    index = np.arange(ds.sizes["realization"] * members, dtype=np.int64)
     return stacked.assign_coords(realization=("realization", index, ds["realization"].attrs))
 
 
 def cells_back(analysis: xr.Dataset, ds: xr.Dataset) -> xr.Dataset:
     """The per-cell analysis of :func:`cells_as_realizations`'s Dataset with its
     realization dim split back into (realization, cell)."""
-    shape = (ds.sizes["realization"], ds.sizes["cell"])
+    return members_back(analysis, ds, "cell")
+
+
+def members_back(analysis: xr.Dataset, ds: xr.Dataset, dim: str) -> xr.Dataset:
+    """The analysis of :func:`members_as_realizations`'s Dataset with its realization dim
+    split back into (realization, ``dim``)."""
+    shape = (ds.sizes["realization"], ds.sizes[dim])
     rest = analysis.drop_vars("realization")
     split = {}
     for name in list(rest.data_vars):
@@ -166,12 +179,12 @@ def cells_back(analysis: xr.Dataset, ds: xr.Dataset) -> xr.Dataset:
         if "realization" not in da.dims:
             continue
         axis = da.dims.index("realization")
-        dims = (*da.dims[:axis], "realization", "cell", *da.dims[axis + 1 :])
+        dims = (*da.dims[:axis], "realization", dim, *da.dims[axis + 1 :])
         values = np.asarray(da.values)
         values = values.reshape(values.shape[:axis] + shape + values.shape[axis + 1 :])
         split[name] = (dims, values, da.attrs)
     out = rest.drop_vars(list(split)).assign_coords(
-        {name: (name, ds[name].values, dict(ds[name].attrs)) for name in ("realization", "cell")}
+        {name: (name, ds[name].values, dict(ds[name].attrs)) for name in ("realization", dim)}
     )
     return out.assign(split)[list(analysis.data_vars)]
 
