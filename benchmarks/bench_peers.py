@@ -16,8 +16,14 @@ tolerance out).
 
 Calls from scipy reach the compiled functions through a jitclass that holds the problem and
 the workspace, so a call crosses from Python into compiled code with three arguments (the
-overhead, measured on a state without contact, is in the table). CVODE (scikits-odes) is
-timed when it is installed.
+overhead, measured on a state without contact, is in the table).
+
+SUNDIALS' CVODE (BDF, through scikit-sundae: ``pip install -e '.[bench]'``) runs the same way,
+phase by phase with the same largest steps, with the analytic Jacobian and each of its direct
+linear solvers ('dense', LAPACK's 'lapackdense'), and with GMRES on difference-quotient
+Jacobian-vector products (no preconditioner). A banded solver gains nothing here: in contact the
+Jacobian is full (the contact couples every membrane mode to every other and to the bot), so
+its bandwidths are those of a dense matrix.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ LADDER = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7)
 MAX_STEPS = (0.2, 0.05)  # s, the peers' largest steps: rodas4's default, and a tighter one
 ROUNDS = 5
 PEERS = ("LSODA", "Radau", "BDF")
+CVODE_SOLVERS = ("dense", "lapackdense", "gmres")  # CVODE's linear solvers, as "CVODE-<name>"
 REFERENCE = (
     Path(__file__).resolve().parents[1] / "tests" / "regression" / "integrator_reference.npz"
 )
@@ -130,6 +137,9 @@ def run_peer(case: Case, method: str, tol: float, max_step: float) -> tuple[floa
     the largest step ``max_step`` (s)."""
     from scipy.integrate import solve_ivp
 
+    if method.startswith("CVODE-"):
+        return run_cvode(case, method.removeprefix("CVODE-"), tol, max_step)
+
     samples = np.empty((case.times.size, case.u0.size))
     samples[0] = case.u0
     y = case.u0.copy()
@@ -155,6 +165,50 @@ def run_peer(case: Case, method: str, tol: float, max_step: float) -> tuple[floa
         samples[inside] = sol.y[:, :-1].T
         y = sol.y[:, -1].copy()
         samples[at_end] = y
+        calls += sol.nfev
+    wall = time.perf_counter() - begin
+    return wall, case.error(samples), calls
+
+
+def run_cvode(case: Case, linsolver: str, tol: float, max_step: float) -> tuple[float, float, int]:
+    """(wall s, path error cm, right-hand-side calls) of CVODE (BDF) with the linear solver
+    ``linsolver`` at rtol = atol = tol and the largest step ``max_step`` (s), phase by phase."""
+    from sksundae.cvode import CVODE
+
+    # y is a read-only view of CVODE's vector; passed as is, the compiled functions are
+    # compiled again for read-only arrays and memory grows by ~50 MB a run: a copy
+    def rhsfn(t, y, yp):
+        yp[:] = case.fun(t, np.array(y))
+
+    def jacfn(t, y, yp, jj):
+        jj[:, :] = case.jac(t, np.array(y))
+
+    options = {"rtol": tol, "atol": tol, "max_step": max_step, "max_num_steps": 100_000}
+    if linsolver == "gmres":
+        options.update(linsolver="gmres", krylov_dim=case.u0.size)
+    else:
+        options.update(linsolver=linsolver, jacfn=jacfn)
+    samples = np.empty((case.times.size, case.u0.size))
+    samples[0] = case.u0
+    y = case.u0.copy()
+    calls = 0
+    begin = time.perf_counter()
+    # one solver, started afresh at each phase (a phase is autonomous)
+    solver = CVODE(rhsfn, **options)
+    for start, end, phase, datum in case.phases():
+        case.holder.phase, case.holder.datum = phase, datum
+        solver.init_step(start, y)
+        rows = np.flatnonzero((case.times > start) & (case.times <= end))
+        for row in rows:
+            sol = solver.step(case.times[row], tstop=end)
+            if not sol.success or not np.all(np.isfinite(sol.y)):
+                return np.nan, np.inf, calls
+            samples[row] = sol.y
+        if rows.size == 0 or case.times[rows[-1]] != end:  # the phase ends between samples
+            sol = solver.step(end, tstop=end)
+            if not sol.success or not np.all(np.isfinite(sol.y)):
+                return np.nan, np.inf, calls
+        y = np.array(sol.y, dtype=np.float64).reshape(-1)
         calls += sol.nfev
     wall = time.perf_counter() - begin
     return wall, case.error(samples), calls
@@ -218,12 +272,13 @@ def call_overhead(case: Case) -> float:
     return (np.median(python) - np.median(compiled)) * 1e6
 
 
-def _cvode():
+def _peers() -> tuple[str, ...]:
+    """scipy's methods, and CVODE's linear solvers when scikit-sundae is installed."""
     try:
-        import scikits.odes  # noqa: F401
+        import sksundae  # noqa: F401
     except ImportError:
-        return None
-    return "CVODE"
+        return PEERS
+    return PEERS + tuple(f"CVODE-{name}" for name in CVODE_SOLVERS)
 
 
 def rows() -> list[dict[str, object]]:
@@ -238,7 +293,7 @@ def rows() -> list[dict[str, object]]:
         # tolerance, every peer at each of MAX_STEPS with its loosest tolerance there
         configs = {"rodas4 default": ("rodas4", None, 0.0)}
         configs["rodas4"] = ("rodas4", loosest(run_rodas4, case, "rodas4"), 0.0)
-        for method in PEERS:
+        for method in _peers():
             for max_step in MAX_STEPS:
                 configs[f"{method}@{max_step:g}"] = (
                     method,
@@ -262,7 +317,7 @@ def rows() -> list[dict[str, object]]:
                 results[name] = result
         base = np.median(timings["rodas4 default"])
         shown = ["rodas4 default", "rodas4"]
-        for method in PEERS:  # each peer at its faster largest step
+        for method in _peers():  # each peer at its faster largest step
             tried = [f"{method}@{m:g}" for m in MAX_STEPS if f"{method}@{m:g}" in timings]
             shown.append(min(tried, key=lambda n: np.median(timings[n])) if tried else method)
         best_peer = min((np.median(timings[n]) for n in shown[2:] if n in timings), default=np.nan)
@@ -315,14 +370,14 @@ def rows() -> list[dict[str, object]]:
                 "note": "a peer's f(t, y) call, beyond the compiled work",
             }
         )
-    if _cvode() is None:
+    if len(_peers()) == len(PEERS):
         out.append(
             {
-                "benchmark": "CVODE (scikits-odes)",
+                "benchmark": "CVODE (scikit-sundae)",
                 "value": np.nan,
                 "unit": "",
                 "target": None,
-                "note": "not installed: not timed",
+                "note": "not installed (pip install -e '.[bench]'): not timed",
             }
         )
     return out

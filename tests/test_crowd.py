@@ -322,6 +322,26 @@ def test_the_command_line_runs_an_assembly_into_one_file_with_a_cell_dim(tmp_pat
     assert main([*argv, "--cells", "4", "--box", "30"]) == 0  # kept: nothing to do
 
 
+def test_an_assembly_thins_its_membrane_record_unless_told_otherwise(tmp_path):
+    from softcell.model.configuration import RunConfig, with_assembly_defaults
+
+    argv = ["simulate", "--radius", "5", "--duration", "0.3", "--quiet", "--cells", "2"]
+    assert main([*argv, "--box", "30", "-o", str(tmp_path / "thin")]) == 0
+    ds = open_dataset(tmp_path / "thin")
+    np.testing.assert_allclose(ds["time"].values, [0.0, 0.1, 0.2, 0.3], atol=1e-12)
+    assert ds.sizes["fine_time"] == 31  # the bodies' fine record stays whole
+    assert ds.attrs["parameter_sample_switch"] == 0.0
+    assert ds.attrs["membrane_record"].startswith("membranes every 0.1 s at 64 points")
+    told = ["--box", "30", "--sample-switch", "0.2", "-o", str(tmp_path / "told")]
+    assert main([*argv, *told]) == 0
+    ds = open_dataset(tmp_path / "told")
+    assert ds.sizes["time"] == 20 + 2  # every 0.01 s to 0.19 s, then 0.2 and 0.3
+    assert "every 0.01 s until 0.2 s, then every 0.1 s" in ds.attrs["membrane_record"]
+    # one cell is the single-cell run: nothing changes
+    one = RunConfig(parameters={"radius": 5.0}, assembly={"cells": 1})
+    assert with_assembly_defaults(one).parameters == {"radius": 5.0}
+
+
 @pytest.mark.parametrize(
     ("flags", "message"),
     [

@@ -13,7 +13,7 @@ from softcell.model.configuration import (
     RunConfig,
     assembly_of,
     bots_of,
-    with_assembly_terms,
+    with_assembly_defaults,
     with_obstacle_term,
 )
 from softcell.model.obstacle_layout import check_clear_of_start
@@ -68,7 +68,7 @@ def _cmd_params(args: argparse.Namespace) -> int:
     from softcell.model.limits import check_realizations, check_run, check_seed
 
     registry = default_registry()
-    config = with_assembly_terms(_request(args))
+    config = with_assembly_defaults(_request(args))
     config.check_components(registry)
     check_in_use(config.parameters, registry, _in_use(config))
     # the checks simulate and analyze make of the [run] and [analysis] tables
@@ -179,7 +179,7 @@ def _request(args: argparse.Namespace) -> RunConfig:
 def _in_use(config: RunConfig) -> dict[str, Any]:
     """The components ``config`` uses: its own, the assembly's terms (an arena's walls) and,
     for many cells, the assembly's pair terms."""
-    in_use = dict(with_assembly_terms(config).components)
+    in_use = dict(with_assembly_defaults(config).components)
     if config.assembly:
         in_use["assembly"] = assembly_of(config).as_dict()
     several = bots_of(config)

@@ -463,6 +463,24 @@ def _record(model, crowd: _Crowd, grid: _Samples, fine: np.ndarray) -> CrowdReco
     )
 
 
+def membrane_record(params) -> str:
+    """What an assembly's file keeps of the membranes, in words (its ``membrane_record``
+    attribute): the sampling intervals (s), the switch time (s) and the stored points."""
+    early, late = float(params.sample_every), float(params.sample_every_late)
+    switch, duration = float(params.sample_switch), float(params.duration)
+    nodes, modes = int(params.stored_nodes), 2 * int(params.cutoff) + 1
+    if switch <= 0.0 or early == late:
+        when = f"every {late if switch <= 0.0 else early:g} s"
+    elif switch >= duration:
+        when = f"every {early:g} s"
+    else:
+        when = f"every {early:g} s until {switch:g} s, then every {late:g} s"
+    return (
+        f"membranes {when} at {nodes} points (from {modes} Fourier modes); the cells' "
+        f"centres and the bots' poses every {early:g} s (the fine record)"
+    )
+
+
 def crowd_dataset(
     record: CrowdRecord,
     model: Model,
@@ -483,6 +501,7 @@ def crowd_dataset(
 
     nodes = int(model.params.stored_nodes)
     times, cells = record.modes.shape[:2]
+    extra_attrs = {**(extra_attrs or {}), "membrane_record": membrane_record(model.params)}
     mx, my = resample(record.modes.reshape(times * cells, -1), nodes)
     center = record.modes[:, :, model.cutoff]
     fine = {

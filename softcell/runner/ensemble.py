@@ -25,7 +25,7 @@ from softcell.components.registry import (
     default_registry,
 )
 from softcell.errors import ConfigError, SoftcellError
-from softcell.model.configuration import RunConfig, assembly_of, bots_of, with_assembly_terms
+from softcell.model.configuration import RunConfig, assembly_of, bots_of, with_assembly_defaults
 from softcell.model.limits import (
     check_realizations,
     check_run,
@@ -78,7 +78,7 @@ def plan(
     """
     check_realizations(realizations)
     check_seed(seed)
-    config = with_assembly_terms(config)
+    config = with_assembly_defaults(config)
     assembly = assembly_of(config)
     config.check_components(registry)
     components = dict(config.components)
