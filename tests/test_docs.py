@@ -124,7 +124,6 @@ def test_documented_commands_parse(page, line):
 def test_the_units_check_reads_the_numpydoc_sections():
     """The docs build's check (docs/conf.py): a quantity without a unit is named, one with
     its unit, a count and a name are not."""
-    pytest.importorskip("numpydoc")
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(

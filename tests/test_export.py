@@ -51,6 +51,9 @@ def crowd(tmp_path_factory):
 def test_every_sample_is_a_frame_of_the_membrane_nodes_then_the_bot(one_cell, tmp_path):
     ds = open_inputs([one_cell])
     done = to_gsd(ds, tmp_path / "r1.gsd", realization=1)
+    # the permissions every output has (gsd alone would give 0640)
+    written = next(one_cell.glob("*.nc")).stat().st_mode & 0o777
+    assert (tmp_path / "r1.gsd").stat().st_mode & 0o777 == written
     one = ds.isel(realization=1)
     with gsd.hoomd.open(tmp_path / "r1.gsd") as trajectory:
         assert len(trajectory) == done.frames == one.sizes["time"]

@@ -29,7 +29,7 @@ import xarray as xr
 
 from softcell.engine.interrupt import deferred
 from softcell.errors import SoftcellError
-from softcell.io.files import atomic_write
+from softcell.io.files import atomic_write, default_mode
 from softcell.io.files import gsd_attributes as gsd_attributes  # read here, kept with the files
 
 #: The GSD particle types, in order of their type ids.
@@ -192,30 +192,32 @@ def to_gsd(
     attributes = np.frombuffer(
         json.dumps({k: _plain(v) for k, v in ds.attrs.items()}).encode(), dtype=np.uint8
     )
-    with atomic_write(path) as tmp, gsd.hoomd.open(tmp, "w") as trajectory:
-        for i, t in enumerate(time):
-            points = np.zeros((n, 3))
-            points[:, :2] = xy[i]
-            frame = gsd.hoomd.Frame()
-            frame.configuration.step = i * every
-            frame.configuration.dimensions = 2
-            frame.configuration.box = [box.Lx, box.Ly, 0, 0, 0, 0]
-            frame.particles.N = n
-            frame.particles.position = box.wrap(points).astype(np.float32)
-            frame.particles.image = (box.get_images(points) if periodic else 0 * points).astype(
-                np.int32
-            )
-            orientation = np.tile(np.array([1.0, 0, 0, 0], dtype=np.float32), (n, 1))
-            orientation[n - bots :, 0] = np.cos(heading[i] / 2)
-            orientation[n - bots :, 3] = np.sin(heading[i] / 2)
-            frame.particles.orientation = orientation
-            frame.log["softcell/time"] = np.array([t], dtype=np.float64)
-            if i == 0:
-                frame.particles.types = list(TYPES)
-                frame.particles.typeid = typeid
-                frame.particles.type_shapes = _shapes(ds)
-                frame.log["softcell/attributes"] = attributes
-            trajectory.append(frame)
+    with atomic_write(path) as tmp:
+        with gsd.hoomd.open(tmp, "w") as trajectory:
+            for i, t in enumerate(time):
+                points = np.zeros((n, 3))
+                points[:, :2] = xy[i]
+                frame = gsd.hoomd.Frame()
+                frame.configuration.step = i * every
+                frame.configuration.dimensions = 2
+                frame.configuration.box = [box.Lx, box.Ly, 0, 0, 0, 0]
+                frame.particles.N = n
+                frame.particles.position = box.wrap(points).astype(np.float32)
+                frame.particles.image = (box.get_images(points) if periodic else 0 * points).astype(
+                    np.int32
+                )
+                orientation = np.tile(np.array([1.0, 0, 0, 0], dtype=np.float32), (n, 1))
+                orientation[n - bots :, 0] = np.cos(heading[i] / 2)
+                orientation[n - bots :, 3] = np.sin(heading[i] / 2)
+                frame.particles.orientation = orientation
+                frame.log["softcell/time"] = np.array([t], dtype=np.float64)
+                if i == 0:
+                    frame.particles.types = list(TYPES)
+                    frame.particles.typeid = typeid
+                    frame.particles.type_shapes = _shapes(ds)
+                    frame.log["softcell/attributes"] = attributes
+                trajectory.append(frame)
+        default_mode(tmp)  # gsd creates its files 0640; every output is 0666 less the umask
     return Exported(path, int(time.size), n, (float(time[0]), float(time[-1])))
 
 

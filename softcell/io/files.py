@@ -201,6 +201,14 @@ def _commit(tmp: Path, path: Path) -> None:
     _fsync_directory(path.parent)
 
 
+def default_mode(path: str | os.PathLike[str]) -> None:
+    """Give ``path`` the permissions ``open`` gives a new file (0666 less the umask), for the
+    writers that choose their own (gsd: 0640)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
 @contextmanager
 def atomic_files(*, makedirs: bool = True) -> Iterator[_Staging]:
     """Write several files all or nothing.
