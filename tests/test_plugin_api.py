@@ -162,3 +162,34 @@ def test_the_trap_recipe_of_the_plugin_guide_holds_the_bot(tmp_path, monkeypatch
             return float(np.hypot(ds.bot_x, ds.bot_y).mean())
 
     assert distance(tmp_path / "trapped") < 2.0 < 5.0 < distance(tmp_path / "free")
+
+
+def test_the_deprecation_warnings_speak_of_this_version_and_the_next():
+    """A rename is announced "in softcell X, ... until Y": X is at most the version being
+    built (``softcell --version``) and Y above it, so a shim past its date fails here."""
+    import re
+    import warnings
+
+    import softcell
+    from softcell.components.contracts import EnergyTerm
+    from softcell.plugin import MOVED
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+
+        class Old(EnergyTerm):  # noqa: F841 (defined for its warning)
+            couples_bot = True
+
+        getattr(softcell.plugin, MOVED[0])
+    messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+    assert len(messages) == 2
+
+    def release(text: str) -> tuple[int, int]:
+        major, minor = text.split(".")[:2]
+        return int(major), int(minor)
+
+    now = release(softcell.__version__)
+    for message in messages:
+        (since,) = re.findall(r"in softcell (\d+\.\d+)", message)
+        (until,) = re.findall(r"until (\d+\.\d+)", message)
+        assert release(since) <= now < release(until), (message, softcell.__version__)
