@@ -262,6 +262,40 @@ def test_no_membrane_goes_into_another_by_more_than_a_few_lambda(seed):
     assert _deepest(record, domain, model) < 2 * lam
 
 
+def test_two_threads_give_the_same_bytes_as_one(built):
+    """Eight cells crowded in a periodic box (area fraction 0.5, random placement), stepped
+    on one thread and on two: the same record to the bit, groups and cells alone included
+    (each thread steps with its own twin of the stepper)."""
+    from softcell.model.assembly import place_cells
+
+    model, stepper = _built(duration=0.6)
+    radius = equilibrium_radius(model.params)
+    domain = Domain("periodic", math.sqrt(8 * math.pi * radius**2 / 0.5))
+    centres = place_cells(8, radius, domain, np.random.default_rng(3), placement="random", gap=0.05)
+    one, two = (
+        run_assembly(model, stepper, domain, centres, cell_rngs(3, 0, 0, 8), threads=n)
+        for n in (1, 2)
+    )
+    assert one.statistics["grouped_intervals"] > 0  # groups were stepped, not only cells alone
+    assert one.statistics == two.statistics
+    for name in ("modes", "pose", "fine_center", "fine_pose"):
+        assert np.array_equal(getattr(one, name), getattr(two, name)), name
+    assert all(
+        np.array_equal(a[k], b[k]) for a, b in zip(one.states, two.states, strict=True) for k in a
+    )
+
+
+@pytest.mark.parametrize("threads", [0, -1, 1.5, True, "2"])
+def test_a_bad_thread_count_is_named(built, threads):
+    from softcell.errors import ParameterError
+
+    model, stepper = built
+    domain = Domain("periodic", 40.0)
+    centres = np.array([[-10.0, 0.0], [10.0, 0.0]])
+    with pytest.raises(ParameterError, match=f"threads = {re.escape(str(threads))}"):
+        run_assembly(model, stepper, domain, centres, cell_rngs(0, 0, 0, 2), threads=threads)
+
+
 @pytest.mark.slow  # compiles a model of its own (walls and a post): ~1 min
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(0, 2**32 - 1))

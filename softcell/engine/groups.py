@@ -16,8 +16,10 @@ Every length is in cm, every time in s.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -202,9 +204,11 @@ def _shifts(centres: np.ndarray, members: np.ndarray, domain: Domain) -> np.ndar
 
 
 class _Crowd:
-    """The cells' states and schedules, and how to advance them one interval."""
+    """The cells' states and schedules, and how to advance them one interval; ``pool`` (a
+    thread pool, or None) steps independent groups at once, each thread with its own twin of
+    the stepper."""
 
-    def __init__(self, model, stepper, domain, states, schedules):
+    def __init__(self, model, stepper, domain, states, schedules, pool=None, threads=1):
         if not hasattr(stepper, "advance_cells"):
             raise ParameterError(
                 "integrator",
@@ -214,6 +218,8 @@ class _Crowd:
             )
         self.model, self.stepper, self.domain = model, stepper, domain
         self.states, self.schedules = states, schedules
+        self.pool = pool
+        self.steppers = [stepper] + [stepper.twin() for _ in range(threads - 1)]
         self.cutoff = model.pair_reach
         self.speed = float(model.params.drive_force) / float(model.params.bot_friction)
         self.together: dict[int, tuple[int, ...]] = {}  # each cell's group last interval
@@ -252,9 +258,11 @@ class _Crowd:
         times = grid.times
         free = self.free(float(times[stop - 1] - times[first - 1]))
         rows = slice(first, stop)
-        for c in np.flatnonzero(free):
-            modes, pose = self.stepper.sample(self.states[c], self.schedules[c], times[rows])
-            grid.keep_cell(rows, int(c), modes, pose)
+        alone = [(1, (int(c),), None, False) for c in np.flatnonzero(free)]
+        for (_, (c,), _, _), (modes, pose) in zip(
+            alone, self._run(alone, times[rows]), strict=True
+        ):
+            grid.keep_cell(rows, c, modes, pose)
             self.free_chunks += 1
         self.together = {}  # groups start afresh in each chunk (a checkpoint's boundary)
         busy = np.flatnonzero(~free)
@@ -262,9 +270,12 @@ class _Crowd:
             return
         for i in range(first, stop):
             self.advance(busy, float(times[i]), float(times[i] - times[i - 1]))
-            for c in busy:
-                s = self.states[c]
-                grid.keep_cell(slice(i, i + 1), int(c), s["modes"][None], s["pose"][None])
+            grid.keep_row(
+                i,
+                busy,
+                np.array([self.states[c]["modes"] for c in busy]),
+                np.array([self.states[c]["pose"] for c in busy]),
+            )
 
     def advance(self, members: np.ndarray, t_end: float, dt: float) -> None:
         """Advance the cells ``members`` to ``t_end`` (s), redoing the interval if groups
@@ -283,27 +294,62 @@ class _Crowd:
                     self.states[c][k][...] = v
 
     def _step(self, labels: np.ndarray, t_end: float) -> None:
-        times = np.array([t_end])
         centres, _ = bounding_circles(self.states, self.model.cutoff)
         together: dict[int, tuple[int, ...]] = {}
+        jobs = []
         for label in np.unique(labels[labels >= 0]):
             members = np.flatnonzero(labels == label)
             key = tuple(int(c) for c in members)
             for c in key:
                 together[c] = key
             if members.size == 1:
-                c = key[0]
-                self.stepper.sample(self.states[c], self.schedules[c], times)
+                jobs.append((1, key, None, False))
                 continue
             self.grouped_intervals += 1
-            self.stepper.advance_cells(
-                [self.states[c] for c in key],
-                [self.schedules[c] for c in key],
-                _shifts(centres, members, self.domain),
-                t_end,
-                rewind=any(self.together.get(c) != key for c in key),
-            )
+            shifts = _shifts(centres, members, self.domain)
+            jobs.append((members.size, key, shifts, any(self.together.get(c) != key for c in key)))
+        self._run(jobs, np.array([t_end]))
         self.together = together
+
+    def _run(self, jobs: list[tuple], times: np.ndarray) -> list:
+        """Do ``jobs`` (size, cells, shifts, rewind): a cell alone sampled at ``times`` (s),
+        a group advanced to ``times[-1]``; returns each job's samples (a group's: None). With
+        a pool, every thread (the calling one too) takes the next job not yet taken, largest
+        group first, until none is left; each job touches its own cells' states only, so the
+        states are the same whichever thread did it."""
+        if self.pool is None or len(jobs) < 2:
+            return [self._job(self.stepper, job, times) for job in jobs]
+        order = sorted(range(len(jobs)), key=lambda i: -jobs[i][0])
+        taken = itertools.count()  # next() is atomic under the GIL
+        results: list = [None] * len(jobs)
+
+        def work(stepper) -> None:
+            for n in taken:
+                if n >= len(order):
+                    return
+                results[order[n]] = self._job(stepper, jobs[order[n]], times)
+
+        others = [self.pool.submit(work, s) for s in self.steppers[1:]]
+        try:
+            work(self.stepper)
+        finally:
+            for other in others:  # every thread done before the states are read or saved
+                other.result()
+        return results
+
+    def _job(self, stepper, job: tuple, times: np.ndarray):
+        size, key, shifts, rewind = job
+        if size == 1:
+            c = key[0]
+            return stepper.sample(self.states[c], self.schedules[c], times)
+        stepper.advance_cells(
+            [self.states[c] for c in key],
+            [self.schedules[c] for c in key],
+            shifts,
+            float(times[-1]),
+            rewind=rewind,
+        )
+        return None
 
 
 class _Samples(SampleGrid):
@@ -330,6 +376,13 @@ class _Samples(SampleGrid):
         slots = self.slot[rows]
         kept = slots >= 0
         self.modes[slots[kept], cell] = modes[kept]
+
+    def keep_row(self, row: int, cells: np.ndarray, modes: np.ndarray, pose: np.ndarray) -> None:
+        """The cells ``cells``' samples of grid row ``row``: modes (C, m), pose (C, 3)."""
+        self.pose[row, cells] = pose
+        self.center[row, cells] = modes[:, self.cutoff]
+        if self.slot[row] >= 0:
+            self.modes[self.slot[row], cells] = modes
 
     def saved_cells(self, sample: int, states: list[dict[str, np.ndarray]]) -> Saved:
         """What a checkpoint keeps at grid sample ``sample`` (every cell's state stacked)."""
@@ -359,6 +412,7 @@ def run_assembly(
     checkpoint_every: float = CHECKPOINT_EVERY,
     progress: Callable[[float], None] | None = None,
     stop: Callable[[], bool] | None = None,
+    threads: int = 1,
 ) -> CrowdRecord:
     """Integrate one realization of an assembly: cell i starts at ``centres[i]`` (cm) with
     the stream ``rngs[i]``; the membranes are sampled at
@@ -381,6 +435,10 @@ def run_assembly(
         Called with the simulated seconds (s) advanced since its last call.
     stop : callable, optional
         Asked between chunks; True stops the run as Ctrl-C does.
+    threads : int
+        Threads that step independent groups (and cells alone) at once, each with a twin of
+        the stepper (its ``twin()``; an integrator without one steps on one thread). The
+        record is the same to the bit whatever their number.
 
     Raises
     ------
@@ -391,8 +449,10 @@ def run_assembly(
     """
     times, membrane, fine = sampling_plan(model.params)
     states, schedules = start_cells(model, stepper, centres, rngs)
-    crowd = _Crowd(model, stepper, domain, states, schedules)
     cells = len(states)
+    threads = _threads(threads, cells, stepper)
+    pool = ThreadPoolExecutor(threads - 1, "softcell-cells") if threads > 1 else None
+    crowd = _Crowd(model, stepper, domain, states, schedules, pool, threads)
     grid = _Samples(times, membrane, fine, cells, model.cutoff)
     first = _start(model, states, grid, checkpoint, label, progress)
     chunk = SAMPLES_PER_CALL if cells == 1 else CHUNK
@@ -424,7 +484,19 @@ def run_assembly(
         ) from None
     finally:
         limits.restore_original_limits()
+        if pool is not None:
+            pool.shutdown()
     return _record(model, crowd, grid, fine)
+
+
+def _threads(threads: int, cells: int, stepper: Stepper) -> int:
+    """The threads an assembly's realization uses: ``threads`` (checked), one for one cell or
+    an integrator that cannot make a twin of its stepper."""
+    if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
+        raise ParameterError("threads", threads, "must be an integer >= 1", "1")
+    if cells == 1 or not hasattr(stepper, "twin"):
+        return 1
+    return int(min(threads, cells))
 
 
 def _start(model, states, grid: _Samples, checkpoint, label, progress) -> int:

@@ -31,6 +31,7 @@ from softcell.model.limits import (
     check_run,
     check_seed,
     check_worker_count,
+    cores,
     human_bytes,
 )
 from softcell.model.obstacle_layout import check_clear_of_start
@@ -436,8 +437,10 @@ def _run(
         if client is not None:
             run_on_cluster(todo, client, bar.update, checkpoint_every)
         elif scheduler is None and workers == 1:
+            # One process: an assembly's realization steps its groups on every core it may
+            # use. A cluster's workers fill the cores already: one thread each there.
             for task in todo:
-                run_task(task, bar.update, checkpoint_every, registry=registry)
+                run_task(task, bar.update, checkpoint_every, registry=registry, threads=cores())
         elif todo:
             with cluster_client(workers, scheduler) as own:
                 run_on_cluster(todo, own, bar.update, checkpoint_every)

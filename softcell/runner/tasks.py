@@ -298,6 +298,7 @@ def run_task(
     checkpoint_every: float = CHECKPOINT_EVERY,
     stoppable: bool = False,
     registry: Registry | None = None,
+    threads: int = 1,
 ) -> str | None:
     """Run one (point, realization) and write its file atomically; returns the path.
 
@@ -315,6 +316,9 @@ def run_task(
     registry : Registry, optional
         Where the components are looked up; on a cluster's worker, the built-ins and the
         installed plugins of that worker.
+    threads : int
+        Threads an assembly of cells steps its independent groups on (the file is the same
+        whatever their number); one cell or one ring uses one.
     """
 
     if registry is None:
@@ -323,7 +327,7 @@ def run_task(
             registry = default_registry()
     model, stepper = _model_and_stepper(task, registry)
     if task.assembly is not None:
-        return _run_assembly(task, model, stepper, progress, checkpoint_every, stoppable)
+        return _run_assembly(task, model, stepper, progress, checkpoint_every, stoppable, threads)
     if task.bots is not None:
         return _run_bots(task, model, stepper, progress, checkpoint_every, stoppable)
     return _run_and_write(
@@ -392,9 +396,10 @@ def _run_assembly(
     progress: Callable[[float], None] | None,
     checkpoint_every: float,
     stoppable: bool,
+    threads: int = 1,
 ) -> str | None:
     """Run one realization of an assembly of cells and write its file, checkpointing as a
-    single cell's realization does."""
+    single cell's realization does; ``threads`` step its independent groups."""
     from softcell.engine.groups import crowd_dataset, run_assembly, starting_centres
     from softcell.model.assembly import Assembly
 
@@ -416,6 +421,7 @@ def _run_assembly(
             checkpoint_every=checkpoint_every,
             progress=(lambda dt: progress(dt * assembly.cells)) if progress else None,
             stop=stop,
+            threads=threads,
         ),
         lambda record, stored: crowd_dataset(record, model, assembly, centres, **stored),
     )
