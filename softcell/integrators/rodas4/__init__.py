@@ -284,8 +284,13 @@ class Rodas4Stepper(Stepper):
         the resolution (a call then costs ~4 us besides the steps)."""
         arrays = (
             state["u"],
+            state["clock"],
+            state["phase_index"],
+            state["counters"],
+            state["dense"],
             state.get("starts", schedule.start),
             state.get("event_times", _NO_EVENTS),
+            state.get("event_count", _NO_COUNT),
             schedule,
         )
         kept = self._cells.get(id(state["u"]))
@@ -294,11 +299,9 @@ class Rodas4Stepper(Stepper):
         if len(self._cells) > 4096:  # states of earlier realizations
             self._cells.clear()
         args = (
-            LoopState(
-                state["u"], state["clock"], state["phase_index"], state["counters"], state["dense"]
-            ),
-            PhaseTable(arrays[1], schedule.phase, schedule.data),
-            EventLog(arrays[2], state.get("event_count", _NO_COUNT)),
+            LoopState(*arrays[:5]),
+            PhaseTable(arrays[5], schedule.phase, schedule.data),
+            EventLog(arrays[6], arrays[7]),
             None,  # the compiled entry, once the first call has resolved it
         )
         self._cells[id(state["u"])] = (arrays, args)
