@@ -4,13 +4,33 @@ from __future__ import annotations
 
 
 class SoftcellError(Exception):
-    """Base class of every error softcell reports to a user as one line (CLI exit status 2)."""
+    """Base class of every error softcell reports to a user as one line (CLI exit status 2).
+
+    Parameters
+    ----------
+    message : str
+        The line printed: what was wrong, with the value and what is allowed. The subclasses
+        below without parameters of their own take this one argument too.
+    """
 
 
 class ParameterError(SoftcellError, ValueError):
     """A parameter value outside its allowed range.
 
-    The message names the parameter, its value with unit, the allowed range and the unit.
+    The message names the parameter, its value with unit, the allowed range and the unit:
+    ``parameter radius = -1 cm is not allowed: must be > 0``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, as ``softcell params`` lists it (kept as ``.name``).
+    value : object
+        The value given, in the parameter's unit (kept as ``.value``).
+    allowed : str
+        What is allowed, as a phrase ("must be > 0", "must be one of ...").
+    unit : str
+        The parameter's unit (UDUNITS, e.g. "cm"); "" or "1" for a pure number, which is then
+        shown without one.
     """
 
     def __init__(self, name: str, value: object, allowed: str, unit: str = "") -> None:
@@ -24,7 +44,14 @@ class ConfigError(SoftcellError, ValueError):
 
 
 class SchemaError(SoftcellError, ValueError):
-    """A Dataset that does not follow the softcell schema; the message names every problem."""
+    """A Dataset that does not follow the softcell schema; the message names every problem.
+
+    Parameters
+    ----------
+    problems : list of str
+        One phrase per problem found (a missing variable, a variable without ``units``, ...),
+        kept as ``.problems`` and joined by "; " into the message.
+    """
 
     def __init__(self, problems: list[str]) -> None:
         self.problems = list(problems)

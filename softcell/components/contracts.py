@@ -41,11 +41,12 @@ class Component(ABC):
         The run's parameter set (values in their declared units); checked by :meth:`check`
         and kept as ``self.params``.
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     kind : str
-        Set by the contract class: ``energy_term``, ``driving_protocol``, ``friction_law``,
-        ``integrator``, ``stopgo_detector`` or ``pair_term``.
+        A class attribute, set by the contract class: ``energy_term``, ``driving_protocol``,
+        ``friction_law``, ``integrator``, ``stopgo_detector``, ``pair_term`` or
+        ``bot_interaction``.
     name : str
         Unique within its kind; lower case, digits and underscores (``run_and_tumble``).
     description : str
