@@ -35,26 +35,20 @@ def kind_name(kind: str) -> str:
 class Component(ABC):
     """Base of every component.
 
+    A component class sets four class attributes: ``kind`` (set by the contract class:
+    ``energy_term``, ``driving_protocol``, ``friction_law``, ``integrator``,
+    ``stopgo_detector``, ``pair_term`` or ``bot_interaction``); ``name`` (unique within its
+    kind; lower case, digits and underscores, as ``run_and_tumble``); ``description`` (one
+    line, shown by ``softcell plugins``); and ``parameters``, a tuple of ``ParameterSpec``:
+    the parameters the component reads, each with default, unit and range. A component may
+    use parameters of the model catalogue (:data:`softcell.plugin.MODEL_PARAMETERS`) by
+    listing their specs, or declare new ones.
+
     Parameters
     ----------
     params : Parameters
         The run's parameter set (values in their declared units); checked by :meth:`check`
         and kept as ``self.params``.
-
-    Attributes
-    ----------
-    kind : str
-        A class attribute, set by the contract class: ``energy_term``, ``driving_protocol``,
-        ``friction_law``, ``integrator``, ``stopgo_detector``, ``pair_term`` or
-        ``bot_interaction``.
-    name : str
-        Unique within its kind; lower case, digits and underscores (``run_and_tumble``).
-    description : str
-        One line, shown by ``softcell plugins``.
-    parameters : tuple of ParameterSpec
-        The parameters the component reads, each with default, unit and range. A component may
-        use parameters of the model catalogue (:data:`softcell.plugin.MODEL_PARAMETERS`)
-        by listing their specs, or declare new ones.
     """
 
     kind: ClassVar[str]
