@@ -204,11 +204,11 @@ def _shifts(centres: np.ndarray, members: np.ndarray, domain: Domain) -> np.ndar
 
 
 class _Crowd:
-    """The cells' states and schedules, and how to advance them one interval; ``pool`` (a
-    thread pool, or None) steps independent groups at once, each thread with its own twin of
-    the stepper."""
+    """The cells' states and schedules, and how to advance them one interval; with
+    ``threads`` > 1, a thread pool steps independent groups at once, each thread with its own
+    twin of the stepper (:meth:`close` ends it)."""
 
-    def __init__(self, model, stepper, domain, states, schedules, pool=None, threads=1):
+    def __init__(self, model, stepper, domain, states, schedules, threads=1):
         if not hasattr(stepper, "advance_cells"):
             raise ParameterError(
                 "integrator",
@@ -218,8 +218,8 @@ class _Crowd:
             )
         self.model, self.stepper, self.domain = model, stepper, domain
         self.states, self.schedules = states, schedules
-        self.pool = pool
         self.steppers = [stepper] + [stepper.twin() for _ in range(threads - 1)]
+        self.pool = ThreadPoolExecutor(threads - 1, "softcell-cells") if threads > 1 else None
         self.cutoff = model.pair_reach
         self.speed = float(model.params.drive_force) / float(model.params.bot_friction)
         self.together: dict[int, tuple[int, ...]] = {}  # each cell's group last interval
@@ -337,6 +337,11 @@ class _Crowd:
                 other.result()
         return results
 
+    def close(self) -> None:
+        """End the thread pool, if any."""
+        if self.pool is not None:
+            self.pool.shutdown()
+
     def _job(self, stepper, job: tuple, times: np.ndarray):
         size, key, shifts, rewind = job
         if size == 1:
@@ -450,9 +455,7 @@ def run_assembly(
     times, membrane, fine = sampling_plan(model.params)
     states, schedules = start_cells(model, stepper, centres, rngs)
     cells = len(states)
-    threads = _threads(threads, cells, stepper)
-    pool = ThreadPoolExecutor(threads - 1, "softcell-cells") if threads > 1 else None
-    crowd = _Crowd(model, stepper, domain, states, schedules, pool, threads)
+    crowd = _Crowd(model, stepper, domain, states, schedules, _threads(threads, cells, stepper))
     grid = _Samples(times, membrane, fine, cells, model.cutoff)
     first = _start(model, states, grid, checkpoint, label, progress)
     chunk = SAMPLES_PER_CALL if cells == 1 else CHUNK
@@ -484,8 +487,7 @@ def run_assembly(
         ) from None
     finally:
         limits.restore_original_limits()
-        if pool is not None:
-            pool.shutdown()
+        crowd.close()
     return _record(model, crowd, grid, fine)
 
 

@@ -232,7 +232,7 @@ class Rodas4Stepper(Stepper):
         self.atol, self.rtol, self.max_step, self.first_step = atol, rtol, max_step, first_step
         self._smooth_nodes = smooth_nodes
         self._control = Control(atol, rtol, max_step)
-        self._cells: dict[int, tuple] = {}  # each cell's arguments (see _prepared)
+        self._cells: dict[int, list] = {}  # each cell's arguments (see _prepared)
         self._group = None  # the group loop, compiled on first use
         self._group_work: dict[int, tuple[GroupWork, PairWork]] = {}
 
@@ -276,9 +276,10 @@ class Rodas4Stepper(Stepper):
         u = state["u"]
         return u[:size] + 1j * u[size : 2 * size], u[2 * size :].copy(), float(state["clock"][T])
 
-    def _prepared(self, state, schedule: Schedule) -> tuple:
-        """The arguments of the compiled loop that belong to ``state`` and ``schedule``, and
-        the loop's compiled entry for their types: made on a cell's first call (numba resolves
+    def _prepared(self, state, schedule: Schedule) -> list:
+        """[the arrays checked, LoopState, PhaseTable, EventLog, compiled entry or None]: the
+        arguments of the compiled loop that belong to ``state`` and ``schedule``, and the
+        loop's compiled entry for their types: made on a cell's first call (numba resolves
         the types, ~30 us a call for these tuples of arrays) and kept while the same arrays
         and schedule are passed, so that the many short calls of an assembly's cells skip
         the resolution (a call then costs ~4 us besides the steps)."""
@@ -295,32 +296,29 @@ class Rodas4Stepper(Stepper):
         )
         kept = self._cells.get(id(state["u"]))
         if kept is not None and all(a is b for a, b in zip(kept[0], arrays, strict=True)):
-            return kept[1]
+            return kept
         if len(self._cells) > 4096:  # states of earlier realizations
             self._cells.clear()
-        args = (
+        kept = [
+            arrays,
             LoopState(*arrays[:5]),
             PhaseTable(arrays[5], schedule.phase, schedule.data),
             EventLog(arrays[6], arrays[7]),
             None,  # the compiled entry, once the first call has resolved it
-        )
-        self._cells[id(state["u"])] = (arrays, args)
-        return args
+        ]
+        self._cells[id(state["u"])] = kept
+        return kept
 
     def sample(self, state, schedule: Schedule, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m = self.model
         times = np.ascontiguousarray(times, dtype=np.float64)
         samples = np.empty((times.size, state["u"].size))
-        loop, table, events, entry = self._prepared(state, schedule)
+        kept = self._prepared(state, schedule)
+        _, loop, table, events, entry = kept
         args = (loop, times, samples, table, self.problem, self._control, _TABLEAU, self.ws, events)
         if entry is None:
             status = self.integrate(*args)
-            signature = tuple(numba.typeof(a) for a in args)
-            arrays, _ = self._cells[id(state["u"])]
-            self._cells[id(state["u"])] = (
-                arrays,
-                (loop, table, events, self.integrate.get_overload(signature)),
-            )
+            kept[4] = self.integrate.get_overload(tuple(numba.typeof(a) for a in args))
         else:
             status = entry(*args)
         if status != OK:
