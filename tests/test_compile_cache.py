@@ -137,6 +137,20 @@ def _forget():
     compiled._LOADED.clear()
 
 
+def test_a_run_knows_whether_its_first_call_compiles(cache):
+    _forget()
+    mark = compiled.loaded_count()
+    assert not compiled.first_call_compiles(mark)  # nothing loaded
+    module = _compile()
+    assert compiled.first_call_compiles(mark)  # loaded, numba has nothing on disk
+    assert module.total(np.arange(3.0)) == 2.0 * 3 + 3
+    assert not compiled.first_call_compiles(mark)  # compiled once on this machine
+    _forget()  # a new process: loads the entry from disk, nothing to compile
+    mark = compiled.loaded_count()
+    _compile()
+    assert not compiled.first_call_compiles(mark)
+
+
 @pytest.mark.parametrize("damage", ["index", "data", "source"])
 def test_a_corrupt_entry_is_rebuilt_with_a_warning(cache, damage):
     module = _compile()
@@ -228,20 +242,22 @@ def test_the_plugin_guide_example_composes_and_runs(cache):
 MODEL_CHILD = textwrap.dedent("""
     import json
     import numpy as np
-    from softcell.engine import build_integrator, build_model, initial_state
+    from softcell.engine import build_integrator, build_model, compiled, initial_state
     from softcell.components.registry import default_registry
     from softcell.engine.cell import realization_rng
     from softcell.testing.compare import PROTOCOL, TERMS, parameters
 
     params = parameters(6.0, 0.2)
     registry = default_registry()
+    mark = compiled.loaded_count()
     model = build_model(params, TERMS, PROTOCOL, registry=registry)
     stepper = build_integrator("rodas4", params, registry).build(model)
+    compiles = compiled.first_call_compiles(mark)
     modes, pose, schedule = initial_state(model, realization_rng(0, 0, 0))
     state = stepper.start(modes, pose, schedule)
     stepper.sample(state, schedule, np.array([0.2]))
     stats = stepper.integrate.stats
-    print(json.dumps({"pose": state["pose"].tolist(),
+    print(json.dumps({"pose": state["pose"].tolist(), "compiles": compiles,
                       "hits": sum(stats.cache_hits.values()),
                       "misses": sum(stats.cache_misses.values())}))
 """)
@@ -263,8 +279,8 @@ def test_the_built_in_model_is_compiled_once_per_machine(cache):
         )
         assert done.returncode == 0, done.stderr
         runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
-    assert (runs[0]["hits"], runs[0]["misses"]) == (0, 1)
-    assert (runs[1]["hits"], runs[1]["misses"]) == (1, 0)
+    assert (runs[0]["hits"], runs[0]["misses"], runs[0]["compiles"]) == (0, 1, True)
+    assert (runs[1]["hits"], runs[1]["misses"], runs[1]["compiles"]) == (1, 0, False)
     assert runs[0]["pose"] == runs[1]["pose"]
     labels = {e.label for e in composed(cache)}
     assert {"rodas4-loop", "rodas4-grid", "partials", "hessians", "fd-drive"} <= labels

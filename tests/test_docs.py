@@ -1,6 +1,7 @@
 """Meta-tests that keep the plugin documentation honest."""
 
 import inspect
+import re
 from pathlib import Path
 
 import pytest
@@ -9,7 +10,8 @@ from softcell.components import hookspecs
 from softcell.components.contracts import CONTRACTS
 from softcell.components.registry import KINDS
 
-DOC = (Path(__file__).parents[1] / "docs" / "plugins.md").read_text()
+DOCS = Path(__file__).parents[1] / "docs"
+DOC = (DOCS / "plugins.md").read_text()
 
 
 def test_every_hook_appears_with_its_signature():
@@ -169,3 +171,13 @@ def test_the_module_map_is_made_from_the_docstrings():
     page = module_map.PAGE.read_text(encoding="utf-8")
     assert page == module_map.page_with_map(page)
     assert "`softcell/integrators/rodas4/templates/loop.py`" in page
+
+
+def test_getting_started_shows_the_steps_reproduce_prints():
+    from softcell.paper.reproduce import QUICK, step_count
+
+    text = (DOCS / "getting-started.md").read_text()
+    steps = re.findall(r"^\[(\d+)/(\d+)\] (.*)$", text, flags=re.M)
+    total = step_count(QUICK)
+    assert [(int(k), int(n)) for k, n, _ in steps] == [(k, total) for k in range(1, total + 1)]
+    assert steps[0][2] == f"simulating {QUICK.describe()}"

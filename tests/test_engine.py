@@ -100,6 +100,30 @@ def test_a_cluster_starts_the_longest_realizations_first(tmp_path):
     assert client.cancelled == 4
 
 
+@pytest.mark.parametrize("compiles", [True, False])
+def test_a_run_says_it_compiles_before_its_bar_moves(tmp_path, monkeypatch, compiles):
+    """The line comes before the first realization, and only when the model's code is not
+    cached yet (whether it is: tests/test_compile_cache.py)."""
+    import softcell.runner.ensemble as ensemble
+
+    said = []
+    asked = []
+    monkeypatch.setattr(
+        ensemble, "compiles_on_first_call", lambda task, registry: asked.append(task) or compiles
+    )
+    original = ensemble.run_task
+    monkeypatch.setattr(
+        ensemble, "run_task", lambda *a, **k: said.append("run") or original(*a, **k)
+    )
+    config = RunConfig(parameters={"radius": 4.0, "duration": 0.02, **COARSE})
+    simulate(config, tmp_path / "run", progress=False, log=said.append)
+    assert len(asked) == 1
+    compiling = [line for line in said if line.startswith("compiling the model")]
+    assert said.index("run") == (0 if not compiles else 1)
+    assert len(compiling) == (1 if compiles else 0)
+    assert compiling == [] or "once per machine" in compiling[0]
+
+
 def test_resume_after_interruption_gives_the_same_bytes(tmp_path, monkeypatch):
     config = RunConfig(parameters={"radius": 4.0, "duration": 0.05, **COARSE})
     whole = simulate(config, tmp_path / "whole", realizations=1, seed=2, progress=False)[0]

@@ -63,8 +63,8 @@ COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None]]] = {
 #: The top-level help's epilog: the workflows, an example each, where to read on.
 WORKFLOWS = """\
 workflows:
-  the paper end to end (about 5 min on 2 cores, ~430 MB; --full: the paper's
-  design, about 1 h on 2 cores with --workers 2, ~5 GB):
+  the paper end to end (--full: the paper's whole design; what each costs in
+  time and disk: docs/performance.md):
     softcell reproduce --quick -o results
   your own runs: simulate -> analyze -> figures
     softcell simulate --radius 4,8,12 --realizations 5 --duration 120 -o run

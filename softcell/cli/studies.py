@@ -14,8 +14,8 @@ from softcell.studies import WHERE
 DESIGN_FLAGS: dict[str, tuple[str | None, str]] = {
     "quick": (
         None,
-        "the grid studies: a look (constriction ~1 min, crowding ~1 h, strategies ~8 min, "
-        "bots ~7 min on 2 cores) instead of the full grid (20 min; ~12 h; ~1.5 h; ~1.6 h)",
+        "the grid studies: a smaller grid, a look in place of the full one "
+        "(what each costs: docs/performance.md)",
     ),
     "radii": ("R1,R2,...", "the grid studies: cell radii R (cm)"),
     "gaps": ("G1,G2,...", "constriction: gap widths w / 2R, in (0, 1.5]; 1.5 is no partition"),

@@ -364,3 +364,21 @@ def compiled_function(
 ) -> Callable[..., object]:
     """The compiled function ``name`` of :func:`compile_module`'s module."""
     return getattr(compile_module(label, source, bindings, description), name)
+
+
+def loaded_count() -> int:
+    """How many cache entries this process has loaded so far: a mark for
+    :func:`first_call_compiles`."""
+    return len(_LOADED)
+
+
+def first_call_compiles(since: int = 0) -> bool:
+    """Whether the modules loaded by this process after mark ``since`` (see
+    :func:`loaded_count`) still have to be compiled: numba keeps no index of the functions of
+    the last of them on disk. The last one loaded is the outermost (a model's loop is
+    composed after, and keyed by, the functions it calls), and numba's cache of it holds the
+    machine code of everything it calls; a combination made but never called (an unused
+    sum of partials, say) has no index and does not count. False when nothing was loaded."""
+    with _LOCK:
+        places = list(_LOADED)[since:]
+    return bool(places) and not any((Path(places[-1]).parent / "__pycache__").glob("*.nbi"))

@@ -326,7 +326,7 @@ def reproduce(
     say = log or (lambda _: None)
     options = {"discard": design.discard}
 
-    total = 5 if design.video is None else 7
+    total = step_count(design)
 
     def step(name: str, what: str):
         say(f"[{len(outcome.steps) + 1}/{total}] {what}")
@@ -382,6 +382,13 @@ def reproduce(
     _write_timing(out, outcome, workers if scheduler is None else None)
     say(f"report: {outcome.report} and {outcome.report.with_suffix('.html')}")
     return outcome
+
+
+def step_count(design: Design) -> int:
+    """How many numbered steps ``[k/n]`` :func:`reproduce` prints for ``design``: the two
+    ensembles, the analyses, the figures and the report, and with a video the wait for it
+    and the figures that show its markers."""
+    return 5 if design.video is None else 7
 
 
 #: What :func:`reproduce` measured of its own run: wall time per step and peak memory.

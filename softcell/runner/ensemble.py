@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import warnings
 from collections.abc import Callable
 from contextlib import suppress
@@ -38,7 +39,14 @@ from softcell.model.obstacle_layout import check_clear_of_start
 from softcell.model.parameters import expand_sweep
 from softcell.runner.cluster import check_scheduler, cluster_client, run_on_cluster
 from softcell.runner.resume import expected_bytes, resume_plan
-from softcell.runner.tasks import STOP_FILE, Task, component_code, run_task, stored_components
+from softcell.runner.tasks import (
+    STOP_FILE,
+    Task,
+    compiles_on_first_call,
+    component_code,
+    run_task,
+    stored_components,
+)
 from softcell.settings import CHECKPOINT_EVERY
 
 
@@ -257,6 +265,13 @@ def _check_execution(
         )
 
 
+def _to_stderr(line: str) -> None:
+    """Print ``line`` where the progress bar is drawn (for callers that gave no ``log``)."""
+    from softcell.settings import progress_bar_class
+
+    progress_bar_class().write(line, file=sys.stderr)
+
+
 def _warn(message: str) -> None:
     warnings.warn(message, stacklevel=3)
 
@@ -397,8 +412,63 @@ def _say_removals(resume, out: Path, log: Callable[[str], None] | None) -> None:
         )
 
 
+def _say_preparation(
+    task: Task, registry: Registry, where: str, say: Callable[[str], None]
+) -> None:
+    """Say, before the progress bar moves, what the first realization waits for: the
+    compilation of a model not yet cached on this machine, or the workers loading it.
+    ``where``: ``"process"`` (this one), ``"local"`` (a cluster on this machine) or
+    ``"remote"`` (a scheduler's or client's workers, whose caches this process cannot see).
+    """
+    if where == "remote":
+        say(
+            "each worker loads the compiled model from its machine's cache before its first "
+            f"realization, or compiles it the first time on a machine ({COMPILING})"
+        )
+        return
+    who = "this process" if where == "process" else "each worker"
+    if compiles_on_first_call(task, registry):
+        say(
+            f"compiling the model for these components in {who}, once per machine "
+            f"({COMPILING}); the bar moves after it"
+        )
+    elif where == "local":
+        say("each worker loads the compiled model from the cache first (a few seconds)")
+
+
+def _where_workers(client: Any, scheduler: str | None) -> str:
+    """``"local"`` for workers on this machine (``--workers N``, or a client of a
+    ``LocalCluster``), ``"remote"`` otherwise."""
+    if scheduler is not None:
+        return "remote"
+    cluster = getattr(client, "cluster", None) if client is not None else "own"
+    return "local" if cluster == "own" or type(cluster).__name__ == "LocalCluster" else "remote"
+
+
+#: What compiling a model costs, as measured in docs/performance.md.
+COMPILING = "about 1 min for the paper's model, 30 s more for many cells, 1.5 min for several bots"
+
+
 #: From this many realizations, a run says what it is about to compute and store.
 LARGE_RUN = 100
+
+
+def _say_plan(
+    todo: list[Task], total: int, reused: int, out: Path, log: Callable[[str], None] | None
+) -> None:
+    """Tell ``log`` what a large run is about to compute and store, and what it reuses."""
+    if log and len(todo) >= LARGE_RUN:
+        points = len({t.point for t in todo})
+        log(
+            f"{len(todo)} realizations to compute ({points} parameter points), about "
+            f"{human_bytes(expected_bytes(todo))} of files in {out}; Ctrl-C stops, a rerun "
+            "resumes"
+        )
+    if log and reused:
+        log(
+            f"{reused} of {total} file(s) in {out} already hold this request: "
+            f"reused as they are; computing {len(todo)}"
+        )
 
 
 def _run(
@@ -421,22 +491,15 @@ def _run(
     _say_removals(resume, out, log)
     remove([*resume.remove, out / STOP_FILE])  # a stop request left by a crash is stale
     todo = resume.todo
-    if log and len(todo) >= LARGE_RUN:
-        points = len({t.point for t in todo})
-        log(
-            f"{len(todo)} realizations to compute ({points} parameter points), about "
-            f"{human_bytes(expected_bytes(todo))} of files in {out}; Ctrl-C stops, a rerun "
-            "resumes"
-        )
-    if log and resume.reused:
-        log(
-            f"{resume.reused} of {len(tasks)} file(s) in {out} already hold this request: "
-            f"reused as they are; computing {len(todo)}"
-        )
+    _say_plan(todo, len(tasks), resume.reused, out, log)
+    in_process = client is None and scheduler is None and workers == 1
+    where = "process" if in_process else _where_workers(client, scheduler)
+    if todo and (log or progress):
+        _say_preparation(todo[0], registry, where, log or _to_stderr)
     with _progress_bar(todo, progress) as bar:
         if client is not None:
             run_on_cluster(todo, client, bar.update, checkpoint_every)
-        elif scheduler is None and workers == 1:
+        elif in_process:
             # One process: an assembly's realization steps its groups on every core it may
             # use. A cluster's workers fill the cores already: one thread each there.
             for task in todo:

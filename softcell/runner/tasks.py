@@ -292,6 +292,20 @@ def _model_and_stepper(task: Task, registry: Registry) -> tuple[Model, Stepper]:
     return _BUILT[key]
 
 
+def compiles_on_first_call(task: Task, registry: Registry) -> bool:
+    """Build ``task``'s model and stepper in this process (once per request, as
+    :func:`run_task` would; an assembly's group loop too) and say whether their first call
+    compiles them: True when their code is not in the compiled-model cache yet, which
+    happens once per machine (see :func:`softcell.engine.compiled.first_call_compiles`)."""
+    from softcell.engine.compiled import first_call_compiles, loaded_count
+
+    mark = loaded_count()
+    _, stepper = _model_and_stepper(task, registry)
+    if task.assembly is not None and hasattr(stepper, "load_group_loop"):
+        stepper.load_group_loop()
+    return first_call_compiles(mark)
+
+
 def run_task(
     task: Task,
     progress: Callable[[float], None] | None = None,

@@ -236,13 +236,18 @@ class Rodas4Stepper(Stepper):
         self._group = None  # the group loop, compiled on first use
         self._group_work: dict[int, tuple[GroupWork, PairWork]] = {}
 
+    def load_group_loop(self) -> None:
+        """Load the group loop of cells in contact (:func:`compiled_group`) now rather than
+        at the first contact; an assembly's run loads it before its progress bar starts."""
+        if self._group is None:
+            self._group = compiled_group(self.model)
+
     def twin(self) -> Rodas4Stepper:
         """A stepper of the same model and control with workspaces of its own, to step other
         cells on another thread at the same time (the compiled loops release the GIL). What
         a step computes depends on its cells' states alone, so the twin's steps are the
         same to the bit."""
-        if self._group is None:
-            self._group = compiled_group(self.model)
+        self.load_group_loop()
         twin = copy.copy(self)
         twin.ws = workspace(self.model, min(self._smooth_nodes, self.model.nodes))
         twin._group_work = {}
@@ -352,8 +357,7 @@ class Rodas4Stepper(Stepper):
         ``rewind`` brings every member back to its last sample first (steps of a cell alone,
         or of another group, may have run ahead of it); False continues a group that stepped
         together over the last interval from where its steps stopped."""
-        if self._group is None:
-            self._group = compiled_group(self.model)
+        self.load_group_loop()
         g = len(states)
         if g not in self._group_work:
             self._group_work[g] = group_work(self.model, g)
