@@ -55,6 +55,14 @@ def test_report_states_what_ran_and_links_every_figure(results):
         assert text in md
     for name in FIGURES:
         assert f"(figures/{name}.png)" in md and f"(figures/{name}.pdf)" in md
+    # A reader meets the findings first; what ran and the parameters close the report.
+    headings = re.findall(r"^## (.*)$", md, flags=re.M)
+    assert headings[0] == "Findings: the paper beside this run"
+    assert headings[-1] == "What ran"
+    assert md.index("| bending_stiffness |") > md.index("## Figures")
+    # The film's notes are said with the film.
+    pipeline = md[md.index("## The experimental pipeline") : md.index("## Figures")]
+    assert "About the film: " in pipeline and "remakes it" in pipeline
 
     class Sources(HTMLParser):
         def __init__(self):

@@ -136,6 +136,7 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
         m = np.asarray(shifted[f"mean_{kind}_duration_shifted"].sel(body="cell").values)
         moves.append(f"<tau_{kind[0]}>: {_fmt(m[0])} / {_fmt(m[1])} / {_fmt(m[2])} s")
     summary = ", ".join(f"{k} {v}" for k, v in video["tracking_summary"].items())
+    notes = video.get("notes", [])
     return [
         Block("h2", "The experimental pipeline"),
         Block(
@@ -157,6 +158,7 @@ def _video_blocks(out: Path, video: dict[str, Any]) -> list[Block]:
             "The experiments' threshold moved by -0.1 / 0 / +0.1 cm/s moves the tracked "
             "means to " + "; ".join(moves) + " (the paper: they barely move).",
         ),
+        *([Block("p", "About the film: " + "; ".join(notes) + ".")] if notes else []),
     ]
 
 
@@ -245,6 +247,36 @@ def write_report(
             f"{platform.machine()} with {os.cpu_count()} cores.",
         ),
         Block("code", command),
+        Block(
+            "p",
+            f"Design '{design.name}': {design.describe()}. What ran, in full, and every "
+            "parameter follow the figures.",
+        ),
+        *_findings_blocks(rows),
+        Block("h2", "Per radius (cell GC)"),
+        _per_radius(analysis),
+        Block(
+            "p",
+            "Errors are standard errors across realizations (a bootstrap over them). The "
+            "shape index is the membrane's perimeter over the square root of its area, "
+            "averaged over samples and realizations: 2 sqrt(pi) = 3.545 for a circle, larger "
+            "the more the membrane departs from one (the paper's IPR).",
+        ),
+    ]
+    if video is not None:
+        blocks += _video_blocks(out, video)
+    blocks.append(Block("h2", "Figures"))
+    for name, files in figures.files.items():
+        by_suffix = {p.suffix: p.relative_to(out).as_posix() for p in files}
+        blocks.append(
+            Block(
+                "figure",
+                (by_suffix.get(".png", ""), by_suffix.get(".pdf", ""), CAPTIONS.get(name, name)),
+            )
+        )
+    for name, why in figures.skipped.items():
+        blocks.append(Block("p", f"{name} was not drawn: {why}."))
+    blocks += [
         Block("h2", "What ran"),
         Block(
             "list",
@@ -275,30 +307,7 @@ def write_report(
                 ],
             ),
         ),
-        *_findings_blocks(rows),
-        Block("h2", "Per radius (cell GC)"),
-        _per_radius(analysis),
-        Block(
-            "p",
-            "Errors are standard errors across realizations (a bootstrap over them). The "
-            "shape index is the membrane's perimeter over the square root of its area, "
-            "averaged over samples and realizations: 2 sqrt(pi) = 3.545 for a circle, larger "
-            "the more the membrane departs from one (the paper's IPR).",
-        ),
     ]
-    if video is not None:
-        blocks += _video_blocks(out, video)
-    blocks.append(Block("h2", "Figures"))
-    for name, files in figures.files.items():
-        by_suffix = {p.suffix: p.relative_to(out).as_posix() for p in files}
-        blocks.append(
-            Block(
-                "figure",
-                (by_suffix.get(".png", ""), by_suffix.get(".pdf", ""), CAPTIONS.get(name, name)),
-            )
-        )
-    for name, why in figures.skipped.items():
-        blocks.append(Block("p", f"{name} was not drawn: {why}."))
     md, page = out / "report.md", out / "report.html"
     title = "softcell reproduction report"
     summary = json_text(

@@ -442,7 +442,6 @@ def _analyses_video_figures(
             video = filming.result()
         outcome.video_alone = filming.seconds
         video["source"] = str(Path(task.path).relative_to(out))
-        outcome.notes.extend(video.pop("notes"))
     tracked = read_dataset(out / "video" / "tracked_analysis.nc")
     with step("figures_with_video", "drawing Fig. 3 and 4 with the tracked video's markers"):
         figures.update(_figures(out, tracked, only=WITH_TRACKED))
