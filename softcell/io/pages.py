@@ -73,7 +73,7 @@ _CSS = (
     "body{font-family:sans-serif;max-width:72em;margin:2em auto;padding:0 1em;"
     "line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid "
     "#bbb;padding:.25em .5em;vertical-align:top;text-align:left}th{background:#eee}"
-    "img{max-width:100%}figure{margin:1.5em 0}pre{background:#f4f4f4;padding:.5em;"
+    "img{max-width:100%;max-height:92vh}figure{margin:1.5em 0}pre{background:#f4f4f4;padding:.5em;"
     "overflow-x:auto}.agrees{color:#1b5e20}.differs{color:#b71c1c}.partly{color:#e65100}"
 )
 

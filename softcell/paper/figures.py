@@ -80,12 +80,16 @@ def _regime_at(analysis: xr.Dataset, i: int) -> int:
 
 
 def _shade_regimes(ax, analysis: xr.Dataset) -> None:
-    """Shade each radius's slot of an R axis with its regime's colour."""
+    """Shade each radius's slot of an R axis with its regime's colour, each regime named
+    once for the legend."""
     radii = analysis["radius"].values
     edges = np.concatenate([[radii[0] - 0.5], 0.5 * (radii[1:] + radii[:-1]), [radii[-1] + 0.5]])
-    for k, regime in enumerate(analysis["regime"].values):
-        if int(regime) in REGIME_COLORS:
-            ax.axvspan(edges[k], edges[k + 1], color=REGIME_COLORS[int(regime)], alpha=0.35, lw=0)
+    named = set()
+    for k, regime in enumerate(int(r) for r in analysis["regime"].values):
+        if regime in REGIME_COLORS:
+            ax.axvspan(edges[k], edges[k + 1], color=REGIME_COLORS[regime], alpha=0.35, lw=0,
+                       label=None if regime in named else REGIME_NAMES[regime])  # fmt: skip
+            named.add(regime)
     ax.set_xlim(edges[0], edges[-1])
 
 
@@ -195,7 +199,7 @@ def _msd_all(ax, analysis: xr.Dataset, body: str = "cell") -> None:
         ax.plot(lag, m, color=color, ls=ls, lw=1, label=f"R = {r:g} cm")
         _band(ax, lag, m, analysis["msd_sem"].sel(radius=r, body=body).values, color)
     _msd_axes(ax)
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=7, ncol=2)
 
 
 def _collapse(ax, analysis: xr.Dataset) -> str:
@@ -240,7 +244,7 @@ def _collapse(ax, analysis: xr.Dataset) -> str:
     ax.set_yscale("log")
     ax.set_xlabel(rf"$\tau\,R^{{{b:+g}}}$ (s cm$^{{{b:+g}}}$)")
     ax.set_ylabel(rf"$\Delta\,R^{{{a:+.2g}}}$ (cm$^{{{2 + a:.3g}}}$)")
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=7, ncol=2)
     text = f"the paper's (1/3, -1): spread {metric[paper]:.3f} decades"
     if best != paper:
         ab = exponents[best]
@@ -274,7 +278,7 @@ TRAJECTORY_SPAN, SPEED_SPAN = 60.0, 10.0
 def figure2(analysis: xr.Dataset, simulations: xr.Dataset):
     """Fig. 2: trajectories at R = 4 and 12 cm, their speed series, MSDs, collapse; panels
     in reading order (a, b / c, d / e, f)."""
-    fig = _figure(11, 12)
+    fig = _figure(8, 8.4)
     axes = fig.subplots(3, 2)
     for col, radius in enumerate((4.0, 12.0)):
         i = _radius_index(analysis, radius)
@@ -341,7 +345,7 @@ def _pdf_panel(
     ax.set_ylim(PDF_FLOOR, 3)
     ax.set_xlabel(rf"$t' = {symbol}/\langle {symbol}\rangle$")
     ax.set_ylabel(r"$\mathcal{P}(t')$")
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=7, ncol=2)
 
 
 #: The lowest probability density the duration PDFs show.
@@ -397,8 +401,8 @@ def _against_radius(
 def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     """Fig. 3: the cell speed at R = 12 cm with stops shaded, PDFs of t/<t>, <tau_g> and
     <tau_s> against R with the regimes shaded."""
-    fig = _figure(13, 7.5)
-    grid = fig.add_gridspec(2, 3)
+    fig = _figure(8, 8.4)
+    grid = fig.add_gridspec(3, 2)
     ax_a = fig.add_subplot(grid[0, :])
     _label(ax_a, "a")
     i = _radius_index(analysis, 12.0)
@@ -412,24 +416,24 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
         ax = fig.add_subplot(grid[1, col])
         _titled(ax, "bc"[col], f"{kind} durations, R >= {min(radii):g} cm")
         _pdf_panel(ax, analysis, kind, radii, tracked)
-    sub = grid[1, 2].subgridspec(2, 1)
-    for row, (name, symbol) in enumerate(
+    for col, (name, symbol) in enumerate(
         (("mean_go_duration", r"\tau_\mathrm{g}"), ("mean_stop_duration", r"\tau_\mathrm{s}"))
     ):
-        ax = fig.add_subplot(sub[row])
-        if row == 0:
+        ax = fig.add_subplot(grid[2, col])
+        if col == 0:
             _titled(ax, "d", "background: the regime")
         _shade_regimes(ax, analysis)
         _against_radius(ax, analysis, name, rf"$\langle {symbol}\rangle$ (s)", tracked)
-        ax.set_ylim(bottom=0)  # a mean duration from 0: a change reads at its true size
-        ax.legend(fontsize=6, loc="lower right")
+        # From 0, so a change reads at its true size; room above the highest error bar.
+        ax.set_ylim(0, 1.15 * ax.dataLim.y1)
+        ax.legend(fontsize=7, loc="lower right")
     return fig
 
 
 def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
     """Fig. 4: (a) the fitted ballistic velocity against the theory's v0 hat, (b) the fitted
     MSD slope against the theory's D hat = 2 v0_hat^2 <tau_g>, for the cell against R."""
-    fig = _figure(9, 4)
+    fig = _figure(8, 3.8)
     ax_a, ax_b = fig.subplots(1, 2)
     for ax, letter, fit, error, theory, label, hat in (
         (
@@ -481,7 +485,7 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
                 )
         ax.set_yscale("log")
         _plain_log_ticks(ax)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=7)
     return fig
 
 
@@ -522,13 +526,13 @@ def figure_s1(analysis: xr.Dataset, free_bot: xr.Dataset):
     _band(ax, free_bot["lag"].values, free.values, free_sem.values, "k")
     _msd_axes(ax)
     ax.set_title("bot MSD, free and inside membranes (standard error shaded)", fontsize=8)
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=7, ncol=2)
     return fig
 
 
 def figure_s2(analysis: xr.Dataset):
     """S2: simulated PDFs of go (a) and stop (b) durations over their means, every R."""
-    fig = _figure(9, 4)
+    fig = _figure(8, 3.8)
     for ax, kind, letter in zip(fig.subplots(1, 2), ("go", "stop"), "ab", strict=True):
         _label(ax, letter)
         _pdf_panel(ax, analysis, kind, list(analysis["radius"].values))
@@ -560,8 +564,10 @@ def figure_theory(analysis: xr.Dataset):
     the renewal theory's, at three radii; (b) the cell MSD over the two theories' MSDs
     (exponential phases dashed, the measured go durations solid), every R; (c) the mean
     cosine between consecutive go displacements against R (0 in both theories)."""
-    fig = _figure(12, 3.8)
-    ax_a, ax_b, ax_c = fig.subplots(1, 3)
+    fig = _figure(8, 6.4)
+    grid = fig.add_gridspec(2, 2)
+    ax_a, ax_b = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1])
+    ax_c = fig.add_subplot(grid[1, :])
     radii = analysis["radius"].values
     colors = dict(zip(radii, _radius_colors(radii), strict=True))
     cell = analysis.sel(body="cell")
@@ -581,7 +587,7 @@ def figure_theory(analysis: xr.Dataset):
     ax_a.set_xlim(0, min(6.0, float(tau[-1])))
     ax_a.set_xlabel(r"$\tau$ (s)")
     ax_a.set_ylabel(r"$C(\tau)/C(0)$ (cell)")
-    ax_a.legend(fontsize=6, title="solid: measured; dotted: renewal theory", title_fontsize=6)
+    ax_a.legend(fontsize=7, title="solid: measured; dotted: renewal theory", title_fontsize=7)
     _label(ax_b, "b")
     lag = analysis["lag"].values
     for r in radii:
@@ -592,10 +598,11 @@ def figure_theory(analysis: xr.Dataset):
     ax_b.axhline(1, color="k", lw=0.6)
     ax_b.set_xscale("log")
     ax_b.set_yscale("log")
+    _plain_log_ticks(ax_b)
     ax_b.set_xlabel(r"$\tau$ (s)")
     ax_b.set_ylabel("cell MSD / theory")
     ax_b.set_title("solid: renewal; dashed: exponential phases", fontsize=7)
-    ax_b.legend(fontsize=5, ncol=2, title="R (cm)", title_fontsize=6)
+    ax_b.legend(fontsize=7, ncol=2, title="R (cm)", title_fontsize=7)
     _label(ax_c, "c")
     _shade_regimes(ax_c, analysis)
     turns = cell["go_turn_cosine_realization"].values
@@ -606,6 +613,7 @@ def figure_theory(analysis: xr.Dataset):
     ax_c.axhline(0, color="k", lw=0.6)
     ax_c.set_xlabel("R (cm)")
     ax_c.set_ylabel("mean cos(turn) between go phases")
+    ax_c.legend(fontsize=7, title="background: the regime", title_fontsize=7)
     return fig
 
 
