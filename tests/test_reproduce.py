@@ -7,6 +7,7 @@ from html.parser import HTMLParser
 import numpy as np
 import pytest
 import xarray as xr
+from readable import unreadable
 
 import softcell
 from softcell.cli import main
@@ -252,27 +253,6 @@ def test_reproduce_at_other_parameters_refuses_a_bad_file_before_running(
     assert not (out / "simulations").exists()
 
 
-#: Where a reader sees the figures: a docs page's content column, 885 px at a 1280 px window
-#: in headless Chromium (800 px taken, narrower windows), and report.html on a 1920 x 1080
-#: screen (its column 72em = 1152 px wide; an image at most 92 % of the window's height,
-#: about 900 px). Text smaller than 9 px there cannot be read.
-SHOWN = {"docs page": (800, None), "report on a 1920 x 1080 screen": (1152, 900)}
-SMALLEST_PX = 9.0
-
-
-def _smallest_text_pt(fig) -> tuple[float, str]:
-    """The smallest font size (pt) of any visible, non-empty text of ``fig``, and the text."""
-    from matplotlib.text import Text
-
-    fig.draw_without_rendering()  # tick labels get their text when the figure is drawn
-    sizes = [
-        (t.get_fontsize(), t.get_text())
-        for t in fig.findobj(Text)
-        if t.get_visible() and t.get_text().strip()
-    ]
-    return min(sizes)
-
-
 def test_every_figure_can_be_read_where_it_is_shown(results):
     from softcell.paper import figures as paper
 
@@ -289,13 +269,5 @@ def test_every_figure_can_be_read_where_it_is_shown(results):
         "figT": paper.figure_theory(analysis),
     }
     assert set(drawn) == set(FIGURES)
-    unreadable = []
-    for name, fig in drawn.items():
-        width_px, height_px = (v * 150 for v in fig.get_size_inches())  # saved at 150 dpi
-        points, text = _smallest_text_pt(fig)
-        for where, (column, screen) in SHOWN.items():
-            scale = min(1.0, column / width_px, (screen or np.inf) / height_px)
-            px = points / 72 * 150 * scale
-            if px < SMALLEST_PX:
-                unreadable.append(f"{name} in the {where}: {text!r} at {px:.1f} px")
-    assert not unreadable, "\n".join(unreadable)
+    found = [line for name, fig in drawn.items() for line in unreadable(name, fig, dpi=150)]
+    assert not found, "\n".join(found)

@@ -3,6 +3,8 @@ the command line (the studies' own physics is tested in their own files)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from softcell.cli import main
@@ -101,3 +103,39 @@ def test_the_help_of_only_names_every_variant_of_both_variant_studies():
     for study in studies().values():
         if isinstance(study, VariantStudy):
             assert all(v.name in help for v in study.variants[1:]), study.name
+
+
+def _redraw_records():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("redraw", DOCS_DIR / "redraw.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.RECORDS
+
+
+DOCS_DIR = Path(__file__).parents[1] / "docs"
+
+
+@pytest.mark.parametrize("record", sorted(_redraw_records()))
+def test_a_study_figure_redrawn_from_its_record_can_be_read(record, tmp_path, monkeypatch):
+    """Each committed study figure, drawn again from its record (docs/redraw.py), has no
+    text under 9 px at a docs page's width."""
+    import json
+
+    from readable import unreadable
+
+    import softcell.studies.figures as figures
+
+    saved = []
+    monkeypatch.setattr(figures, "_save", lambda fig, path, dpi: saved.append((fig, dpi)))
+    name = json.loads((DOCS_DIR / record).read_text())["study"]
+    studies()[name].redraw(DOCS_DIR / record, tmp_path / "figure.png")
+    assert len(saved) == 1
+    fig, dpi = saved[0]
+    assert not unreadable(record, fig, dpi, where={"docs page": (800, None)})
+
+
+def test_a_record_of_another_study_is_not_redrawn(tmp_path):
+    with pytest.raises(SoftcellError, match="record of study 'strategies', not 'crowding'"):
+        studies()["crowding"].redraw(DOCS_DIR / "strategies/strategies.json", tmp_path / "x.png")

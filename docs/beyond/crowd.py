@@ -83,16 +83,16 @@ def crowd_analysis(ds, out: Path) -> dict:
     for i in range(a.sizes["realization"]):
         ax.plot(a["time"], a["polar_order"].isel(realization=i), lw=0.8, label=f"realization {i}")
     ax.axhline(independent, color="k", ls="--", lw=0.8, label="independent headings")
-    ax.set(xlabel="time (s)", ylabel="polar order of the bots (1)", ylim=(0, 1))
+    ax.set(xlabel="time (s)", ylabel="polar order of the bots", ylim=(0, 1))
     ax.legend(fontsize=7)
     ax = axes[1]
     ax.errorbar(r, g, yerr=g_err, fmt="o-", ms=2.5, lw=0.8, capsize=2)
     ax.axhline(1.0, color="k", ls="--", lw=0.8)
-    ax.set(xlabel="centre distance r / 2R (1)", ylabel="pair correlation g(r) (1)")
+    ax.set(xlabel="centre distance r / 2R", ylabel="pair correlation g(r)")
     ax = axes[2]
     size = a["cluster_size"].values
     ax.bar(size, a["cluster_size_fraction"].values, color="tab:blue")
-    ax.set(xlabel="cluster size (cells in contact)", ylabel="fraction of cells (1)")
+    ax.set(xlabel="cluster size (cells in contact)", ylabel="fraction of cells")
     ax = axes[3]
     count = a["shape_index_by_density_count"].values
     shown = count >= 10
@@ -105,7 +105,7 @@ def crowd_analysis(ds, out: Path) -> dict:
         capsize=2,
     )
     ax.axhline(2 * math.sqrt(math.pi), color="k", ls="--", lw=0.8, label=r"circle, $2\sqrt{\pi}$")
-    ax.set(xlabel="local area fraction (1)", ylabel="shape index P / sqrt(A) (1)")
+    ax.set(xlabel="local area fraction", ylabel="shape index P / sqrt(A)")
     ax.legend(fontsize=7)
     fig.suptitle(
         f"{cells} cells of R = 5 cm at an area fraction of 0.35 (periodic box), "

@@ -24,6 +24,33 @@ def _save(fig, path: Path, dpi: int) -> None:
     plt.close(fig)
 
 
+#: Width (in) of every study figure: shown at a docs page's width (about 800 px) its
+#: smallest text, 8 pt, is 11 px high.
+WIDTH = 8.0
+
+
+def _grid(plt, panels: int, height: float = 3.1):
+    """A figure of ``panels`` axes two to a row, ``WIDTH`` wide and ``height`` (in) a row;
+    returns the figure, the panels' axes and the spare axes of an odd count (for a legend,
+    its frame and ticks off), or None."""
+    rows = (panels + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(WIDTH, height * rows), constrained_layout=True)
+    axes = list(np.ravel(axes))
+    spare = axes[panels] if len(axes) > panels else None
+    if spare is not None:
+        spare.set_axis_off()
+    return fig, axes[:panels], spare
+
+
+def _legend_in(spare, ax, **options) -> None:
+    """``ax``'s legend in the spare axes (or on ``ax`` when there is none)."""
+    handles, labels = ax.get_legend_handles_labels()
+    if spare is None:
+        ax.legend(fontsize=8, **options)
+    else:
+        spare.legend(handles, labels, loc="center", fontsize=9, frameon=False, **options)
+
+
 def friction_figures(
     folder: Path, variants: Sequence[Any], results: dict[str, Any], free_seconds: float
 ) -> list[str]:
@@ -35,7 +62,7 @@ def friction_figures(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
+    fig, axes, spare = _grid(plt, 3)
     for v in variants:
         r = results[v.name]
         axes[0].plot(r["radius"], r["mean_stop_duration"], "o-", label=v.label)
@@ -46,8 +73,8 @@ def friction_figures(
     axes[2].set(
         xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log", title="shape excess during stops"
     )
-    axes[0].legend(fontsize=7)
-    _save(fig, folder / "friction.png", dpi=120)
+    _legend_in(spare, axes[0])
+    _save(fig, folder / "friction.png", dpi=110)
 
     from softcell.analysis.fits import confined_square_msd
 
@@ -60,7 +87,10 @@ def friction_figures(
         lag = np.asarray(long["arena"]["lag"])
         d = long["arena"]["confined_d"]
         ax.loglog(
-            lag, confined_square_msd(lag, d, 100.0), "k--", label=f"confined fit, D = {d:.1f} cm2/s"
+            lag,
+            confined_square_msd(lag, d, 100.0),
+            "k--",
+            label=f"confined fit, D = {d:.1f} cm$^2$/s",
         )
         ax.loglog(
             lag,
@@ -69,8 +99,8 @@ def friction_figures(
             label=f"confined formula at the renewal D = {renewal:.2f}",
         )
         ax.axhline(100.0**2 / 3, color="0.6", lw=0.8, label="L^2 / 3")
-    ax.set(xlabel="lag (s)", ylabel="MSD (cm2)", title="free bot: open floor and 1 m arena")
-    ax.legend(fontsize=7)
+    ax.set(xlabel="lag (s)", ylabel="MSD (cm$^2$)", title="free bot: open floor and 1 m arena")
+    ax.legend(fontsize=8)
     _save(fig, folder / "arena.png", dpi=120)
     return ["friction.png", "arena.png"]
 
@@ -250,7 +280,7 @@ def constriction_figure(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(11.5, 4.0), constrained_layout=True)
+    fig, axes, spare = _grid(plt, 3, height=3.4)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     panels = (
         (axes[0], "rate", "rate_sem", "rate_upper_95"),
@@ -280,7 +310,7 @@ def constriction_figure(
     for ax in axes[:2]:
         ax.set_ylim(bottom=0)
     axes[2].set(ylabel="shape index P / sqrt(A)", title="(c) shape with the centre in the gap")
-    axes[0].legend(fontsize=8)
+    _legend_in(spare, axes[0])
     axes[2].legend(fontsize=8)
     _save(fig, path, dpi=110)
     if not outside:
@@ -298,7 +328,7 @@ def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequenc
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(11.5, 3.8), constrained_layout=True)
+    fig, axes, spare = _grid(plt, 3)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     panels = (
         ("msd_slope", "D hat (cm$^2$/s)", "(a) long-time D hat of the cells"),
@@ -321,11 +351,12 @@ def crowding_figure(path: Path, points: Sequence[dict[str, Any]], radii: Sequenc
                     [0.0], [alone[key]], yerr=[alone[f"{key}_sem"]], fmt="o", mfc="none",
                     color=c, capsize=3,
                 )  # fmt: skip
-            ax.set(xlabel="area fraction phi (open marker: a lone cell)", ylabel=label, title=title)
+            ax.set(xlabel="area fraction phi", ylabel=label, title=title)
     axes[0].set_ylim(bottom=0)
     axes[1].set_ylim(bottom=0)
     axes[2].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
-    axes[0].legend(fontsize=8)
+    axes[0].errorbar([], [], fmt="o", mfc="none", color="0.3", label="a lone cell (at phi = 0)")
+    _legend_in(spare, axes[0])
     axes[2].legend(fontsize=8)
     _save(fig, path, dpi=110)
 
@@ -341,7 +372,7 @@ def strategies_figure(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.8), constrained_layout=True)
+    fig, axes, _ = _grid(plt, 4)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     panels = (
         ("msd_slope", "D hat (cm$^2$/s)", "(a) long-time D hat of the cell"),
@@ -362,7 +393,7 @@ def strategies_figure(
     for ax in axes[1:3]:
         ax.set_ylim(bottom=0)
     axes[3].axhline(2 * math.sqrt(math.pi), color="0.5", lw=1, label="circle, 2 sqrt(pi)")
-    axes[0].legend(fontsize=7, loc="center left")
+    axes[0].legend(fontsize=8, loc="center left")
     _save(fig, path, dpi=110)
 
 
@@ -386,7 +417,8 @@ def bots_figure(path: Path, points: Sequence[dict[str, Any]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 3, figsize=(11.5, 6.6), constrained_layout=True)
+    fig, axes, _ = _grid(plt, 6, height=2.9)
+    axes = np.asarray(axes)
     ran = [p for p in points if not p.get("missing") and not p.get("does_not_fit")]
     kinds = sorted({(p["shape"], p["alignment"] > 0) for p in ran if p["count"] > 1})
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]

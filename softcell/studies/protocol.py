@@ -22,6 +22,8 @@ from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
+from softcell.errors import SoftcellError
+
 
 class Study:
     """The protocol of every study (``softcell study NAME``).
@@ -227,6 +229,23 @@ class GridStudy(Study):
             log=log,
         )
         return self.summarize(out, design, seed, parameters)
+
+    def redraw(self, record: Path, path: Path) -> str:
+        """Draw the figure of a study's record (its ``<name>.json``) again at ``path`` from
+        the values the record holds, without its runs; returns the figure's caption ("" when
+        the page writes its own)."""
+        import json
+
+        result = json.loads(Path(record).read_text(encoding="utf-8"))
+        if result.get("study") != self.name:
+            raise SoftcellError(
+                f"{record} is the record of study {result.get('study')!r}, not {self.name!r}"
+            )
+        kind = type(self.designs[self.default])
+        design = kind(
+            **{k: tuple(v) if isinstance(v, list) else v for k, v in result["design"].items()}
+        )
+        return self.figure(Path(path), result, design)
 
     def summarize(
         self, out: Path, design: Any, seed: int, parameters: dict[str, Any] | None = None

@@ -1,0 +1,38 @@
+"""Draw the committed study figures again from their records, without running the studies.
+
+Each page's figure is drawn by its study from the values in the record beside it
+(``<name>.json``), so a change of how figures look needs no new runs::
+
+    python docs/redraw.py
+
+The records stay as they are; only the PNG files beside them are written.
+"""
+
+from pathlib import Path
+
+from softcell.studies import studies
+
+HERE = Path(__file__).parent
+
+#: Each committed record and the figure drawn from it.
+RECORDS = {
+    "strategies/strategies.json": "strategies/strategies.png",
+    "assemblies/crowding.json": "assemblies/crowding.png",
+    "assemblies/constriction.json": "assemblies/constriction.png",
+    "bots/bots.json": "bots/bots.png",
+    "bots/bots_medium.json": "bots/bots_medium.png",
+}
+
+
+def main() -> None:
+    import json
+
+    every = studies()
+    for record, figure in RECORDS.items():
+        name = json.loads((HERE / record).read_text(encoding="utf-8"))["study"]
+        every[name].redraw(HERE / record, HERE / figure)
+        print(f"{figure} from {record}")
+
+
+if __name__ == "__main__":
+    main()
