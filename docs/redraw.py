@@ -27,11 +27,18 @@ RECORDS = {
 def main() -> None:
     import json
 
+    from softcell.studies.figures import friction_figures
+    from softcell.studies.friction_and_arena import FREE_LONG, VARIANTS
+
     every = studies()
     for record, figure in RECORDS.items():
         name = json.loads((HERE / record).read_text(encoding="utf-8"))["study"]
         every[name].redraw(HERE / record, HERE / figure)
         print(f"{figure} from {record}")
+    # `softcell beyond`'s record: the static-friction variants and the arena.
+    results = json.loads((HERE / "beyond" / "beyond.json").read_text(encoding="utf-8"))
+    for name in friction_figures(HERE / "beyond", VARIANTS, results, FREE_LONG[1]):
+        print(f"beyond/{name} from beyond/beyond.json")
 
 
 if __name__ == "__main__":

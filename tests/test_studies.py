@@ -139,3 +139,20 @@ def test_a_study_figure_redrawn_from_its_record_can_be_read(record, tmp_path, mo
 def test_a_record_of_another_study_is_not_redrawn(tmp_path):
     with pytest.raises(SoftcellError, match="record of study 'strategies', not 'crowding'"):
         studies()["crowding"].redraw(DOCS_DIR / "strategies/strategies.json", tmp_path / "x.png")
+
+
+def test_the_beyond_figures_redrawn_from_their_record_can_be_read(tmp_path, monkeypatch):
+    import json
+
+    from readable import unreadable
+
+    import softcell.studies.figures as figures
+    from softcell.studies.friction_and_arena import FREE_LONG, VARIANTS
+
+    saved = []
+    monkeypatch.setattr(figures, "_save", lambda fig, path, dpi: saved.append((fig, dpi)))
+    results = json.loads((DOCS_DIR / "beyond" / "beyond.json").read_text())
+    names = figures.friction_figures(tmp_path, VARIANTS, results, FREE_LONG[1])
+    assert names == ["friction.png", "arena.png"] and len(saved) == 2
+    for name, (fig, dpi) in zip(names, saved, strict=True):
+        assert not unreadable(name, fig, dpi, where={"docs page": (800, None)})

@@ -484,7 +484,7 @@ def figure4(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
                     label=f"tracked video ({span:g} s), {'fit' if name == fit else 'theory'}",
                 )
         ax.set_yscale("log")
-        _plain_log_ticks(ax)
+        plain_log_ticks(ax)
         ax.legend(fontsize=7)
     return fig
 
@@ -495,7 +495,7 @@ def _record_span(analysis: xr.Dataset) -> float:
     return round(float(t[-1] - t[0]))
 
 
-def _plain_log_ticks(ax, axis: str = "y") -> None:
+def plain_log_ticks(ax, axis: str = "y") -> None:
     """Plain numbers on a log axis (1, 2, 3, 5, 10; 0.2, 0.3, 0.5), not 6x10^-1: every power
     of ten, and the minor ticks at 2, 3 and 5 times one."""
     from matplotlib.ticker import FuncFormatter
@@ -598,7 +598,7 @@ def figure_theory(analysis: xr.Dataset):
     ax_b.axhline(1, color="k", lw=0.6)
     ax_b.set_xscale("log")
     ax_b.set_yscale("log")
-    _plain_log_ticks(ax_b)
+    plain_log_ticks(ax_b)
     ax_b.set_xlabel(r"$\tau$ (s)")
     ax_b.set_ylabel("cell MSD / theory")
     ax_b.set_title("solid: renewal; dashed: exponential phases", fontsize=7)

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from softcell.io.files import atomic_write
+from softcell.paper.figures import plain_log_ticks
 
 
 def _save(fig, path: Path, dpi: int) -> None:
@@ -73,6 +74,7 @@ def friction_figures(
     axes[2].set(
         xlabel="R (cm)", ylabel="IPR - 2 sqrt(pi)", yscale="log", title="shape excess during stops"
     )
+    plain_log_ticks(axes[2])
     _legend_in(spare, axes[0])
     _save(fig, folder / "friction.png", dpi=110)
 
