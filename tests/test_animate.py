@@ -58,6 +58,44 @@ def test_a_gif_of_an_assembly_has_every_cell_in_one_panel(runs):
     assert movie.size[0] == 480  # one panel
 
 
+def _red(frame):
+    return (frame[..., 0] > 150) & (frame[..., 1] < 100) & (frame[..., 2] < 100)
+
+
+def test_a_gif_keeps_flat_colours_flat(runs):
+    """The panel's light grey background is one colour in every frame (FFmpeg's fixed
+    palette dithered it into speckles), and the membrane stays red."""
+    root, one, _ = runs
+    movie = animate(open_dataset(one), root / "one.gif", fps=10, progress=False)
+    _, frames = _decoded(movie.path)
+    for frame in frames:
+        corner = frame[40:70, 400:470].reshape(-1, 3)  # the first panel's top right, empty
+        assert len(np.unique(corner, axis=0)) == 1
+        assert np.abs(corner[0].astype(int) - 250).max() <= 3  # #fafafa
+        assert _red(frame).sum() > 50
+
+
+def test_a_ring_across_a_periodic_edge_shows_on_the_other_side(runs):
+    """Every cell put astride the box's right edge (x = 15 cm of a 30 cm box): its image
+    shows at the left edge."""
+    root, _, crowd = runs
+    ds = open_dataset(crowd).load()
+    moved = ds.copy(deep=True)
+    for body in ("cell", "bot"):
+        moved[f"{body}_x"].values[:] = 15.0
+        moved[f"{body}_y"].values[:] = 0.0
+    for axis, centre in (("x", 15.0), ("y", 0.0)):
+        ring = (ds[f"membrane_{axis}"] - ds[f"cell_{axis}"]).isel(cell=0).values
+        moved[f"membrane_{axis}"].values[:] = ring[:, :, None, :] + centre
+    movie = animate(moved, root / "edge.mp4", fps=10, end=0.2, progress=False)
+    _, frames = _decoded(movie.path)
+    panel = frames[-1][28:]  # below the header
+    # the window spans -16 .. 16 cm over 480 px: the image's arc at -15 .. -10 cm
+    left = _red(panel[:, 15:90]).sum()
+    right = _red(panel[:, 390:465]).sum()
+    assert right > 50 and left > 0.5 * right
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [

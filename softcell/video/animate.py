@@ -26,7 +26,7 @@ from softcell.model.obstacle_layout import Post, parse_obstacles
 from softcell.schema import validate
 
 #: What each suffix is written as: (codec, pixel format).
-FORMATS = {".mp4": ("libx264", "yuv420p"), ".gif": ("gif", "rgb8")}
+FORMATS = {".mp4": ("libx264", "yuv420p"), ".gif": ("gif", "pal8")}
 
 #: The start of the comment written into an MP4's metadata (GIF keeps none), by which
 #: ``softcell track`` knows an animation from a film.
@@ -204,15 +204,49 @@ def _encode(scene, times, path: Path, how: tuple, fps: float, progress: bool):
         stream.width, stream.height, stream.pix_fmt = width, height, pixels
         if codec == "libx264":
             stream.options = {"crf": str(crf), "preset": "medium"}
+        palette = _palette(scene, times) if pixels == "pal8" else None
         bar = progress_bar_class()(times, disable=not progress, desc="animate", unit="frame")
         for t in bar:
-            frame = av.VideoFrame.from_ndarray(scene.draw(float(t)), format="rgb24")
+            image = scene.draw(float(t))
+            frame = (
+                av.VideoFrame.from_ndarray(image, format="rgb24")
+                if palette is None
+                else av.VideoFrame.from_ndarray(_indexed(image, palette), format="pal8")
+            )
             for packet in stream.encode(frame):
                 container.mux(packet)
         for packet in stream.encode():
             container.mux(packet)
         container.close()
     return Movie(path, len(times), fps, (width, height), (float(times[0]), float(times[-1])))
+
+
+#: Frames a GIF's palette is chosen from, spread over the movie.
+PALETTE_FRAMES = 6
+
+
+def _palette(scene, times: np.ndarray):
+    """One palette of 256 colours for a whole GIF, chosen (median cut) from frames spread
+    over the movie, so that flat colours stay flat: FFmpeg's fixed 3-3-2 palette dithers
+    every colour it lacks, the light grey background into speckles."""
+    from PIL import Image
+
+    picks = np.unique(np.linspace(0, times.size - 1, PALETTE_FRAMES).round().astype(int))
+    sample = np.concatenate([scene.draw(float(times[i])) for i in picks], axis=0)
+    return Image.fromarray(sample).quantize(256, method=Image.Quantize.MEDIANCUT)
+
+
+def _indexed(image: np.ndarray, palette) -> tuple[np.ndarray, np.ndarray]:
+    """``image`` (uint8[H, W, 3]) as PyAV's ``pal8``: each pixel the index of the nearest
+    colour of ``palette``, undithered, and the palette as uint8[256, 4] ARGB."""
+    from PIL import Image
+
+    indices = Image.fromarray(image).quantize(palette=palette, dither=Image.Dither.NONE)
+    rgb = np.zeros((256, 3), dtype=np.uint8)
+    colours = np.frombuffer(bytes(palette.getpalette()), dtype=np.uint8).reshape(-1, 3)[:256]
+    rgb[: len(colours)] = colours
+    argb = np.concatenate([np.full((256, 1), 255, dtype=np.uint8), rgb], axis=1)
+    return np.asarray(indices, dtype=np.uint8), argb
 
 
 class _Scene:
@@ -306,9 +340,6 @@ class _Scene:
         return max(sides) + 2
 
     def _panel(self, ax, r: int) -> dict:
-        from matplotlib.collections import LineCollection
-        from matplotlib.patches import Ellipse
-
         x0, x1, y0, y1 = self._window(r)
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
@@ -322,20 +353,38 @@ class _Scene:
         ax.text(x0 + 1 + bar / 2, y0 + 1.3, f"{bar:g} cm", ha="center", va="bottom", fontsize=9)
         if not self.crowd:
             ax.text(0.5, 0.985, f"realization {r}", transform=ax.transAxes, ha="center", va="top")
-        cells = []
-        for _ in range(self.cells):
-            (membrane,) = ax.plot([], [], color="#c0392b", lw=1.6)
-            trails = [ax.plot([], [], color="0.55", lw=0.7)[0] for _ in range(self.bots)]
-            centre = LineCollection([], linewidths=1.8)
-            ax.add_collection(centre)
-            bodies, heads = [], []
-            for _ in range(self.bots):
-                bodies.append(Ellipse((0, 0), 2 * self.a, 2 * self.b, color="0.2"))
-                ax.add_patch(bodies[-1])
-                heads.append(ax.plot([], [], color="w", lw=1.5)[0])
-            cells.append({"membrane": membrane, "bot": trails, "centre": centre,
-                          "body": bodies, "head": heads})  # fmt: skip
+        # In a periodic box, a ring across an edge shows on the other side too: up to four
+        # images of each cell (itself, across x, across y, across the corner).
+        copies = 4 if self.boundary == "periodic" and np.isfinite(self.box) else 1
+        cells = [[self._cell_artists(ax) for _ in range(copies)] for _ in range(self.cells)]
         return {"cells": cells}
+
+    def _cell_artists(self, ax) -> dict:
+        """The artists of one image of a cell: membrane, bot trails, centre trail, bodies."""
+        from matplotlib.collections import LineCollection
+        from matplotlib.patches import Ellipse
+
+        (membrane,) = ax.plot([], [], color="#c0392b", lw=1.6)
+        trails = [ax.plot([], [], color="0.55", lw=0.7)[0] for _ in range(self.bots)]
+        centre = LineCollection([], linewidths=1.8)
+        ax.add_collection(centre)
+        bodies, heads = [], []
+        for _ in range(self.bots):
+            bodies.append(Ellipse((0, 0), 2 * self.a, 2 * self.b, color="0.2"))
+            ax.add_patch(bodies[-1])
+            heads.append(ax.plot([], [], color="w", lw=1.5)[0])
+        return {"membrane": membrane, "bot": trails, "centre": centre, "body": bodies,
+                "head": heads}  # fmt: skip
+
+    def _images(self, mx: np.ndarray, my: np.ndarray) -> list[np.ndarray]:
+        """The offsets (cm) at which a ring drawn at ``mx, my`` (cm) shows in a periodic
+        box: itself, and its images across each edge it crosses."""
+        half = self.box / 2
+        ox = self.box if np.min(mx) < -half else -self.box if np.max(mx) > half else 0.0
+        oy = self.box if np.min(my) < -half else -self.box if np.max(my) > half else 0.0
+        offsets = [(0.0, 0.0)] + [(ox, 0.0)] * bool(ox) + [(0.0, oy)] * bool(oy)
+        offsets += [(ox, oy)] * bool(ox and oy)
+        return [np.array(o) for o in offsets]
 
     def _fixtures(self, ax) -> None:
         """The box's walls (or its periodic edges) and the obstacles."""
@@ -380,7 +429,7 @@ class _Scene:
         k0 = int(np.searchsorted(self.t, self.t[k] - self.trail))
         box, periodic = self.box, self.boundary == "periodic"
         for panel, r in zip(self.artists, self.panels, strict=True):
-            for c, art in enumerate(panel["cells"]):
+            for c, copies in enumerate(panel["cells"]):
                 shift = np.zeros(2)
                 cx = self.bodies["cell_x"][r, k0 : k + 1, c]
                 cy = self.bodies["cell_y"][r, k0 : k + 1, c]
@@ -388,14 +437,23 @@ class _Scene:
                     shift = -box * np.round(np.array([cx[-1], cy[-1]]) / box)
                 mx = np.append(self.mx[r, m, c], self.mx[r, m, c][0]) + shift[0]
                 my = np.append(self.my[r, m, c], self.my[r, m, c][0]) + shift[1]
-                art["membrane"].set_data(mx, my)
-                points = np.stack([cx + shift[0], cy + shift[1]], axis=1)
-                segments = np.stack([points[:-1], points[1:]], axis=1)
-                go = self.go[r, c, k0:k]
-                art["centre"].set_segments(segments)
-                art["centre"].set_color([GO_COLOUR if g else STOP_COLOUR for g in go])
-                for j in range(self.bots):
-                    self._draw_bot(art, r, c, j, (k0, k), shift)
+                images = self._images(mx, my) if periodic else [np.zeros(2)]
+                for i, art in enumerate(copies):
+                    shown = i < len(images)
+                    for artist in (art["membrane"], art["centre"], *art["bot"], *art["body"],
+                                   *art["head"]):  # fmt: skip
+                        artist.set_visible(shown)
+                    if not shown:
+                        continue
+                    o = images[i]
+                    art["membrane"].set_data(mx + o[0], my + o[1])
+                    points = np.stack([cx + shift[0] + o[0], cy + shift[1] + o[1]], axis=1)
+                    art["centre"].set_segments(np.stack([points[:-1], points[1:]], axis=1))
+                    art["centre"].set_color(
+                        [GO_COLOUR if g else STOP_COLOUR for g in self.go[r, c, k0:k]]
+                    )
+                    for j in range(self.bots):
+                        self._draw_bot(art, r, c, j, (k0, k), shift + o)
         self.stamp.set_text(f"t = {self.t[k]:.2f} s")
         self.canvas.draw()
         return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
