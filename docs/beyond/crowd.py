@@ -132,7 +132,9 @@ def deepest(ds, box: float, periodic: bool) -> float:
     rings as polygons of their 64 stored points (whose sagitta is 0.006 cm)."""
     worst = 0.0
     mx, my = ds["membrane_x"].values[0], ds["membrane_y"].values[0]
-    for t in range(0, mx.shape[0], 10):
+    # every 0.1 s, whatever the membrane record's sampling (an assembly keeps it every 0.1 s)
+    every = max(1, round(0.1 / float(np.diff(ds["time"].values[:2])[0])))
+    for t in range(0, mx.shape[0], every):
         cells = mx.shape[1]
         centres = np.stack([mx[t].mean(axis=-1), my[t].mean(axis=-1)], axis=1)
         for c in range(cells):
