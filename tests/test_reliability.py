@@ -781,7 +781,12 @@ def test_a_second_local_cluster_on_the_machine_says_nothing(tmp_path):
     finally:
         held.close()
     assert run.returncode == 0, run.stderr
-    assert "already in use" not in run.stderr and run.stderr.strip() == "", run.stderr
+    said = [  # the workers compile the model the first time on a machine, and say so
+        line
+        for line in run.stderr.strip().splitlines()
+        if not line.startswith("softcell: compiling the model")
+    ]
+    assert "already in use" not in run.stderr and said == [], run.stderr
 
 
 @pytest.mark.parametrize("verb", ["export", "animate"])

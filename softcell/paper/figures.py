@@ -425,7 +425,8 @@ def figure3(analysis: xr.Dataset, tracked: xr.Dataset | None = None):
         _shade_regimes(ax, analysis)
         _against_radius(ax, analysis, name, rf"$\langle {symbol}\rangle$ (s)", tracked)
         # From 0, so a change reads at its true size; room above the highest error bar.
-        ax.set_ylim(0, 1.15 * ax.dataLim.y1)
+        top = ax.dataLim.y1  # -inf when no radius has a value
+        ax.set_ylim(0, 1.15 * top if np.isfinite(top) and top > 0 else None)
         ax.legend(fontsize=7, loc="lower right")
     return fig
 

@@ -416,7 +416,8 @@ def _say_preparation(
     task: Task, registry: Registry, where: str, say: Callable[[str], None]
 ) -> None:
     """Say, before the progress bar moves, what the first realization waits for: the
-    compilation of a model not yet cached on this machine, or the workers loading it.
+    compilation of a model not yet cached on this machine (nothing when it is cached), or,
+    for remote workers whose caches this process cannot see, that they load or compile it.
     ``where``: ``"process"`` (this one), ``"local"`` (a cluster on this machine) or
     ``"remote"`` (a scheduler's or client's workers, whose caches this process cannot see).
     """
@@ -427,13 +428,11 @@ def _say_preparation(
         )
         return
     who = "this process" if where == "process" else "each worker"
-    if compiles_on_first_call(task, registry):
+    if compiles_on_first_call(task, registry):  # loading a cached model takes a second
         say(
             f"compiling the model for these components in {who}, once per machine "
             f"({COMPILING}); the bar moves after it"
         )
-    elif where == "local":
-        say("each worker loads the compiled model from the cache first (a few seconds)")
 
 
 def _where_workers(client: Any, scheduler: str | None) -> str:
