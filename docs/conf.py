@@ -24,14 +24,6 @@ myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
 
 # Executed examples: every notebook runs at each build, so none can rot.
-# The tutorial's kernel talks to the build over local sockets (IPC), not TCP: over TCP,
-# ipykernel >= 7 warns that its traffic is unencrypted. myst-nb creates the kernel manager
-# through jupyter-cache and nbclient, which pass no configuration through, so the transport
-# is set as the kernel manager's default here.
-from jupyter_client.manager import KernelManager  # noqa: E402
-
-KernelManager.class_traits()["transport"].default_value = "ipc"
-
 nb_execution_mode = "force"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
