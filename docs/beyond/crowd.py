@@ -78,13 +78,14 @@ def crowd_analysis(ds, out: Path) -> dict:
         "neighbour_exchange_rate_per_s": _mean_and_error(a["neighbour_exchange_rate"].values),
         "local_area_fraction": _mean_and_error(a["local_area_fraction"].values),
     }
-    fig, axes = plt.subplots(1, 4, figsize=(12, 3.1), layout="constrained")
+    fig, axes = plt.subplots(2, 2, figsize=(8, 6.2), layout="constrained")
+    axes = axes.ravel()
     ax = axes[0]
     for i in range(a.sizes["realization"]):
         ax.plot(a["time"], a["polar_order"].isel(realization=i), lw=0.8, label=f"realization {i}")
     ax.axhline(independent, color="k", ls="--", lw=0.8, label="independent headings")
     ax.set(xlabel="time (s)", ylabel="polar order of the bots", ylim=(0, 1))
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=8)
     ax = axes[1]
     ax.errorbar(r, g, yerr=g_err, fmt="o-", ms=2.5, lw=0.8, capsize=2)
     ax.axhline(1.0, color="k", ls="--", lw=0.8)
@@ -106,12 +107,12 @@ def crowd_analysis(ds, out: Path) -> dict:
     )
     ax.axhline(2 * math.sqrt(math.pi), color="k", ls="--", lw=0.8, label=r"circle, $2\sqrt{\pi}$")
     ax.set(xlabel="local area fraction", ylabel="shape index P / sqrt(A)")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=8)
     fig.suptitle(
         f"{cells} cells of R = 5 cm at an area fraction of 0.35 (periodic box), "
-        f"{numbers['realizations']} realizations of 60 s, from {ANALYSIS['discard']:g} s, "
+        f"{numbers['realizations']} realizations of 60 s,\nfrom {ANALYSIS['discard']:g} s, "
         "samples 0.5 s apart; error bars: standard errors across realizations",
-        fontsize=9,
+        fontsize=10,
     )
     fig.savefig(out / "crowd_analysis.png", dpi=110)
     return numbers
@@ -251,7 +252,7 @@ def main(argv: list[str] | None = None) -> None:
         "crowd": summary(ds_crowd, CROWD["box"], True),
         "corral": summary(ds_corral, CORRAL["box"], False, POST),
     }
-    fig, axes = plt.subplots(2, 4, figsize=(10, 5.4), layout="constrained")
+    fig, axes = plt.subplots(2, 4, figsize=(8, 4.6), layout="constrained")
     draw(axes[0], ds_crowd, CROWD["box"], False, "")
     draw(axes[1], ds_corral, CORRAL["box"], True, POST)
     for row in axes:
@@ -259,11 +260,11 @@ def main(argv: list[str] | None = None) -> None:
         y0 = row[0].get_ylim()[0] + 2
         row[0].plot([x0, x0 + 10], [y0, y0], color="k", lw=2.5)
         row[0].text(x0 + 5, y0 + 0.8, "10 cm", ha="center", va="bottom", fontsize=8)
-    axes[0, 0].set_ylabel(f"16 cells, periodic box {CROWD['box']:g} cm", fontsize=9)
-    axes[1, 0].set_ylabel(f"8 cells, walled box {CORRAL['box']:g} cm, post", fontsize=9)
+    axes[0, 0].set_ylabel(f"16 cells,\nperiodic box {CROWD['box']:g} cm", fontsize=9)
+    axes[1, 0].set_ylabel(f"8 cells, walled box\n{CORRAL['box']:g} cm, a post", fontsize=9)
     fig.suptitle(
-        "Assemblies of soft cells (R = 5 cm): membranes, bots (dot and heading) and the bots' "
-        "last 2 s of path",
+        "Assemblies of soft cells (R = 5 cm): membranes, bots (dot and heading)\nand the "
+        "bots' last 2 s of path",
         fontsize=10,
     )
     args.output.mkdir(parents=True, exist_ok=True)
