@@ -440,8 +440,11 @@ def _where_workers(client: Any, scheduler: str | None) -> str:
     ``LocalCluster``), ``"remote"`` otherwise."""
     if scheduler is not None:
         return "remote"
-    cluster = getattr(client, "cluster", None) if client is not None else "own"
-    return "local" if cluster == "own" or type(cluster).__name__ == "LocalCluster" else "remote"
+    if client is None:
+        return "local"
+    return (
+        "local" if type(getattr(client, "cluster", None)).__name__ == "LocalCluster" else "remote"
+    )
 
 
 #: What compiling a model costs, as measured in docs/performance.md.

@@ -43,13 +43,10 @@ def _grid(plt, panels: int, height: float = 3.1):
     return fig, axes[:panels], spare
 
 
-def _legend_in(spare, ax, **options) -> None:
-    """``ax``'s legend in the spare axes (or on ``ax`` when there is none)."""
+def _legend_in(spare, ax) -> None:
+    """``ax``'s legend in the spare axes of :func:`_grid`."""
     handles, labels = ax.get_legend_handles_labels()
-    if spare is None:
-        ax.legend(fontsize=8, **options)
-    else:
-        spare.legend(handles, labels, loc="center", fontsize=9, frameon=False, **options)
+    spare.legend(handles, labels, loc="center", fontsize=9, frameon=False)
 
 
 def friction_figures(

@@ -228,24 +228,26 @@ PALETTE_FRAMES = 6
 def _palette(scene, times: np.ndarray):
     """One palette of 256 colours for a whole GIF, chosen (median cut) from frames spread
     over the movie, so that flat colours stay flat: FFmpeg's fixed 3-3-2 palette dithers
-    every colour it lacks, the light grey background into speckles."""
+    every colour it lacks, the light grey background into speckles. Returns the palette as
+    PIL's image of it and as PyAV's uint8[256, 4] ARGB."""
     from PIL import Image
 
     picks = np.unique(np.linspace(0, times.size - 1, PALETTE_FRAMES).round().astype(int))
     sample = np.concatenate([scene.draw(float(times[i])) for i in picks], axis=0)
-    return Image.fromarray(sample).quantize(256, method=Image.Quantize.MEDIANCUT)
-
-
-def _indexed(image: np.ndarray, palette) -> tuple[np.ndarray, np.ndarray]:
-    """``image`` (uint8[H, W, 3]) as PyAV's ``pal8``: each pixel the index of the nearest
-    colour of ``palette``, undithered, and the palette as uint8[256, 4] ARGB."""
-    from PIL import Image
-
-    indices = Image.fromarray(image).quantize(palette=palette, dither=Image.Dither.NONE)
+    palette = Image.fromarray(sample).quantize(256, method=Image.Quantize.MEDIANCUT)
     rgb = np.zeros((256, 3), dtype=np.uint8)
     colours = np.frombuffer(bytes(palette.getpalette()), dtype=np.uint8).reshape(-1, 3)[:256]
     rgb[: len(colours)] = colours
-    argb = np.concatenate([np.full((256, 1), 255, dtype=np.uint8), rgb], axis=1)
+    return palette, np.concatenate([np.full((256, 1), 255, dtype=np.uint8), rgb], axis=1)
+
+
+def _indexed(image: np.ndarray, palette) -> tuple[np.ndarray, np.ndarray]:
+    """``image`` (uint8[H, W, 3]) as PyAV's ``pal8`` pair: each pixel the index of the
+    nearest colour of ``palette`` (from :func:`_palette`), undithered, and the ARGB table."""
+    from PIL import Image
+
+    image_palette, argb = palette
+    indices = Image.fromarray(image).quantize(palette=image_palette, dither=Image.Dither.NONE)
     return np.asarray(indices, dtype=np.uint8), argb
 
 
